@@ -1,0 +1,71 @@
+#include "app/cli.h"
+
+#include <CLI/CLI.hpp>
+
+#include <exception>
+#include <iostream>
+#include <string>
+
+#include "app/build_info.h"
+#include "app/commands/commands.h"
+#include "app/exit_codes.h"
+#include "app/log.h"
+
+namespace fetouch::app {
+
+namespace {
+
+std::string version_text() {
+  return std::string("fetouch ") + kVersion + " (git " + kGitRevision + ", " + kBuildType +
+         ", " + kCompiler + ", deal.II " + kDealIIVersion + ", VTK " + kVtkVersion + ")";
+}
+
+}  // namespace
+
+int run_cli(int argc, char** argv) {
+  CLI::App app{
+      "Fetouch: touch soft tissue reconstructed from 3D ultrasound through haptic devices, with a\n"
+      "nonlinear finite-element model behind the touch.\n"
+      "\n"
+      "Start with `fetouch check config/scenes/block_press.yaml`; `fetouch COMMAND --help` tells\n"
+      "more about each command. Exit codes: 0 ok, 1 the work failed, 2 bad usage or bad input.",
+      "fetouch"};
+  app.set_version_flag("--version", version_text(), "Print the version and git revision, then exit");
+  int verbosity = 0;
+  bool quiet = false;
+  app.add_flag("-v,--verbose", verbosity, "More detail on stderr (-vv for debugging)");
+  app.add_flag("-q,--quiet", quiet, "Only errors on stderr");
+  app.require_subcommand(1);
+  app.fallthrough();  // -v and -q work after the subcommand too
+  app.footer("Documentation: README.md and docs/ in the source tree.");
+
+  int exit_code = kExitOk;
+  add_check_command(app, exit_code);
+
+  app.parse_complete_callback([&]() {
+    if (quiet) log::set_level(log::Level::error);
+    else if (verbosity >= 2) log::set_level(log::Level::debug);
+    else if (verbosity == 1) log::set_level(log::Level::detail);
+  });
+
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::CallForHelp& e) {
+    return app.exit(e) == 0 ? kExitOk : kExitBadInput;
+  } catch (const CLI::CallForAllHelp& e) {
+    return app.exit(e) == 0 ? kExitOk : kExitBadInput;
+  } catch (const CLI::CallForVersion& e) {
+    app.exit(e);
+    return kExitOk;
+  } catch (const CLI::ParseError& e) {
+    std::cerr << "error: " << e.what() << "\nRun `fetouch --help` (or `fetouch COMMAND --help`) "
+                                         "for usage.\n";
+    return kExitBadInput;
+  } catch (const std::exception& e) {
+    log::error() << e.what();
+    return kExitFailure;
+  }
+  return exit_code;
+}
+
+}  // namespace fetouch::app

@@ -1,0 +1,13 @@
+// Each subcommand registers its options on the parent CLI11 app and sets the callback that runs it.
+// The callback stores the exit code in `exit_code`.
+#pragma once
+
+namespace CLI {
+class App;
+}
+
+namespace fetouch::app {
+
+void add_check_command(CLI::App& parent, int& exit_code);
+
+}  // namespace fetouch::app

@@ -1,0 +1,219 @@
+// The scene: everything a Fetouch session needs to know about the tissue, its loads, the solver, the
+// haptic loop and the probes, as typed and validated values. docs/scenes.md documents every key.
+//
+// Units are SI throughout (m, N, s, Pa, kg); key names carry the unit (`radius_m`, `rate_hz`).
+// Every path is absolute, resolved against the folder of the scene file that named it.
+#pragma once
+
+#include <array>
+#include <filesystem>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace fetouch::config {
+
+using Vec3 = std::array<double, 3>;
+
+// Where a value was written (1-based), so later stages can point at the scene when they reject it.
+struct SourceLocation {
+  int line = 0;
+  int column = 0;
+};
+
+// ---- mesh ---------------------------------------------------------------------------------------
+
+enum class MeshSource { file, volume, generated };
+enum class ElementType { p1, p2, q1, q2 };  // P: tetrahedra (simplex), Q: hexahedra
+enum class GeneratedShape { box, ball, shell };
+enum class SmoothingFilter { none, gaussian, median, anisotropic_diffusion };
+
+// Options for turning an ultrasound volume into a mesh (imaging + meshes pipeline).
+struct MeshingOptions {
+  double target_size_m = 4e-3;
+  std::optional<double> threshold;  // intensity; absent: chosen automatically (Otsu)
+  std::optional<int> label;         // for a label map: the label to mesh
+  SmoothingFilter smoothing = SmoothingFilter::gaussian;
+  double smoothing_sigma_m = 1e-3;
+};
+
+// A mesh generated from a primitive. Boundary faces of a box are named xmin, xmax, ymin, ymax, zmin,
+// zmax; the ball's surface is `surface`; the shell's are `inner` and `outer`.
+struct GeneratedMesh {
+  GeneratedShape shape = GeneratedShape::box;
+  Vec3 size_m{0.1, 0.1, 0.1};  // box edge lengths, the box spans [0, size]
+  double radius_m = 0.05;        // ball and shell outer radius, centred at the origin
+  double inner_radius_m = 0.03;  // shell only
+  int refinements = 2;           // uniform refinements of the coarse primitive
+};
+
+struct MeshSpec {
+  MeshSource source = MeshSource::generated;
+  std::filesystem::path path;  // file or volume, absolute
+  MeshingOptions meshing;      // volume only
+  GeneratedMesh generated;     // generated only
+  ElementType element = ElementType::p1;
+  SourceLocation where;
+};
+
+// ---- material -----------------------------------------------------------------------------------
+
+enum class MaterialModel {
+  linear_elastic,
+  saint_venant_kirchhoff,
+  neo_hookean,
+  neo_hookean_incompressible,  // mixed u-p formulation, no volumetric locking
+  mooney_rivlin
+};
+
+struct Material {
+  MaterialModel model = MaterialModel::neo_hookean;
+  double youngs_modulus_pa = 0;  // all models but mooney_rivlin
+  double poisson_ratio = 0;      // all models but mooney_rivlin, in (-1, 0.5)
+  double c10_pa = 0;             // mooney_rivlin
+  double c01_pa = 0;             // mooney_rivlin
+  double bulk_modulus_pa = 0;    // mooney_rivlin
+  double density_kg_per_m3 = 1000;
+};
+
+// ---- effects ------------------------------------------------------------------------------------
+
+enum class Effect { elasticity, gravity, inertia, damping, incompressibility, cavity, contact };
+enum class TimeIntegrator { backward_euler, newmark, hht };
+enum class PressureVolumeLaw { linear, isothermal_gas };
+
+struct Effects {
+  std::vector<Effect> listed;  // in the order written; elasticity is always simulated
+
+  Vec3 gravity_m_per_s2{0, 0, -9.81};
+
+  TimeIntegrator integrator = TimeIntegrator::backward_euler;
+  double hht_alpha = -0.1;  // in [-1/3, 0]
+
+  double rayleigh_mass_per_s = 0;     // damping C = a M + b K: a
+  double rayleigh_stiffness_s = 0;    // b
+
+  std::string cavity_surface;  // physical group of the closed inner surface
+  PressureVolumeLaw cavity_law = PressureVolumeLaw::linear;
+  double cavity_initial_pressure_pa = 0;
+  double cavity_bulk_modulus_pa = 2.2e9;  // linear law: dp = -K dV / V0 (water)
+
+  bool has(Effect effect) const;
+};
+
+// ---- boundary -----------------------------------------------------------------------------------
+
+enum class BoundaryType { fixed, traction };
+enum class SelectorKind { box, physical_group, plane };
+
+struct Selector {
+  SelectorKind kind = SelectorKind::box;
+  Vec3 box_min{0, 0, 0};
+  Vec3 box_max{0, 0, 0};
+  std::string physical_group;
+  Vec3 plane_point{0, 0, 0};
+  Vec3 plane_normal{0, 0, 1};
+  double plane_tolerance_m = 1e-6;
+};
+
+struct BoundaryRegion {
+  std::string name;
+  BoundaryType type = BoundaryType::fixed;
+  Selector select;
+  Vec3 traction_pa{0, 0, 0};  // traction only
+  SourceLocation where;
+};
+
+// ---- solver -------------------------------------------------------------------------------------
+
+enum class LinearSolver { automatic, direct, cg_amg };
+
+struct Solver {
+  double rate_hz = 20;
+  double newton_relative_tolerance = 1e-8;
+  double newton_absolute_tolerance = 1e-12;
+  int newton_max_iterations = 25;
+  bool line_search = true;
+  int max_load_step_cuts = 8;
+  LinearSolver linear_solver = LinearSolver::automatic;
+  int direct_max_dofs = 60000;  // automatic: direct (MUMPS) up to this size, CG + AMG above
+};
+
+// ---- haptics ------------------------------------------------------------------------------------
+
+enum class LocalModelType { p, pi, smith, pi_smith };
+enum class HoldType { zoh, foh };
+
+struct Haptics {
+  double rate_hz = 1000;
+  LocalModelType local_model = LocalModelType::pi;
+  HoldType hold = HoldType::zoh;
+  bool automatic_gains = true;
+  double proportional_n_per_m = 0;  // Kh, when gains are given
+  double integral_n_per_m = 0;      // I in L(z) = Kh + I/(z-1), per tick, when gains are given
+  double robustness_margin = 0.3;   // stable for K0 scaled by (1 - m) ... (1 + m)
+  double max_force_n = 3.3;
+  double max_force_rate_n_per_s = 1000;
+  double watchdog_timeout_s = 0.25;
+
+  // Ticks per solver frame, N; valid once the scene has been validated.
+  int ratio(const Solver& solver) const;
+};
+
+// ---- probes -------------------------------------------------------------------------------------
+
+enum class DeviceType { replay, operator_model, phantom, mouse };
+
+struct HandModel {  // the virtual operator: a mass pulled to the target by a spring and a damper
+  double mass_kg = 0.3;
+  double stiffness_n_per_m = 300;
+  double damping_n_s_per_m = 8;
+};
+
+struct Device {
+  DeviceType type = DeviceType::replay;
+  std::filesystem::path trajectory;  // replay and operator: CSV (t, x, y, z) or a recording (.h5)
+  HandModel hand;                    // operator only
+  std::string phantom_name;          // phantom only: the HD device name, empty for the default
+};
+
+struct Probe {
+  std::string name;
+  Device device;
+  double radius_m = 5e-3;
+  SourceLocation where;
+};
+
+// ---- the scene ----------------------------------------------------------------------------------
+
+struct Scene {
+  std::filesystem::path source;  // the scene file, absolute
+  std::string text;              // the file's text, kept for recordings
+  std::string name;
+  std::string description;
+  MeshSpec mesh;
+  Material material;
+  Effects effects;
+  std::vector<BoundaryRegion> boundary;
+  Solver solver;
+  Haptics haptics;
+  std::vector<Probe> probes;
+};
+
+// Names as written in scene files, for summaries and messages.
+const char* to_string(MeshSource);
+const char* to_string(ElementType);
+const char* to_string(GeneratedShape);
+const char* to_string(SmoothingFilter);
+const char* to_string(MaterialModel);
+const char* to_string(Effect);
+const char* to_string(TimeIntegrator);
+const char* to_string(PressureVolumeLaw);
+const char* to_string(BoundaryType);
+const char* to_string(SelectorKind);
+const char* to_string(LinearSolver);
+const char* to_string(LocalModelType);
+const char* to_string(HoldType);
+const char* to_string(DeviceType);
+
+}  // namespace fetouch::config

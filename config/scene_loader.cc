@@ -1,0 +1,709 @@
+#include "config/scene_loader.h"
+
+#include <yaml-cpp/yaml.h>
+
+#include <algorithm>
+#include <cctype>
+#include <cmath>
+#include <fstream>
+#include <tuple>
+#include <set>
+#include <sstream>
+
+#include "config/yaml_reader.h"
+
+namespace fetouch::config {
+
+using detail::Choices;
+using detail::Entry;
+using detail::MapView;
+using detail::Need;
+using detail::Range;
+using detail::Reader;
+
+namespace {
+
+const Choices<ElementType> kElements{
+    {"p1", ElementType::p1}, {"p2", ElementType::p2}, {"q1", ElementType::q1}, {"q2", ElementType::q2}};
+const Choices<GeneratedShape> kShapes{{"box", GeneratedShape::box},
+                                      {"ball", GeneratedShape::ball},
+                                      {"shell", GeneratedShape::shell}};
+const Choices<SmoothingFilter> kFilters{{"none", SmoothingFilter::none},
+                                        {"gaussian", SmoothingFilter::gaussian},
+                                        {"median", SmoothingFilter::median},
+                                        {"anisotropic_diffusion", SmoothingFilter::anisotropic_diffusion}};
+const Choices<MaterialModel> kModels{
+    {"linear_elastic", MaterialModel::linear_elastic},
+    {"saint_venant_kirchhoff", MaterialModel::saint_venant_kirchhoff},
+    {"neo_hookean", MaterialModel::neo_hookean},
+    {"neo_hookean_incompressible", MaterialModel::neo_hookean_incompressible},
+    {"mooney_rivlin", MaterialModel::mooney_rivlin}};
+const Choices<Effect> kEffects{{"elasticity", Effect::elasticity},
+                               {"gravity", Effect::gravity},
+                               {"inertia", Effect::inertia},
+                               {"damping", Effect::damping},
+                               {"incompressibility", Effect::incompressibility},
+                               {"cavity", Effect::cavity},
+                               {"contact", Effect::contact}};
+const Choices<TimeIntegrator> kIntegrators{{"backward_euler", TimeIntegrator::backward_euler},
+                                           {"newmark", TimeIntegrator::newmark},
+                                           {"hht", TimeIntegrator::hht}};
+const Choices<PressureVolumeLaw> kLaws{{"linear", PressureVolumeLaw::linear},
+                                       {"isothermal_gas", PressureVolumeLaw::isothermal_gas}};
+const Choices<BoundaryType> kBoundaryTypes{{"fixed", BoundaryType::fixed},
+                                           {"traction", BoundaryType::traction}};
+const Choices<LinearSolver> kLinearSolvers{{"auto", LinearSolver::automatic},
+                                           {"direct", LinearSolver::direct},
+                                           {"cg_amg", LinearSolver::cg_amg}};
+const Choices<LocalModelType> kLocalModels{{"p", LocalModelType::p},
+                                           {"pi", LocalModelType::pi},
+                                           {"smith", LocalModelType::smith},
+                                           {"pi_smith", LocalModelType::pi_smith}};
+const Choices<HoldType> kHolds{{"zoh", HoldType::zoh}, {"foh", HoldType::foh}};
+const Choices<DeviceType> kDevices{{"replay", DeviceType::replay},
+                                   {"operator", DeviceType::operator_model},
+                                   {"phantom", DeviceType::phantom},
+                                   {"mouse", DeviceType::mouse}};
+
+template <class E>
+const char* name_of(const Choices<E>& choices, E value) {
+  for (const auto& c : choices)
+    if (c.second == value) return c.first.c_str();
+  return "?";
+}
+
+std::string format_number(double value) {
+  std::ostringstream out;
+  out << value;
+  return out.str();
+}
+
+// Reports each key of `keys` present in `map` as not used in the situation `why` describes.
+void reject_keys(MapView& map, const std::vector<std::string>& keys, const std::string& why) {
+  for (const auto& key : keys) {
+    if (!map.has(key)) continue;
+    const Entry e = map.entry(key);
+    map.reader().error(e.key_mark, e.path, "'" + key + "' is not used " + why);
+  }
+}
+
+// ---- mesh ---------------------------------------------------------------------------------------
+
+void read_generated(MapView& parent, GeneratedMesh& out) {
+  const Entry e = parent.entry("generate");
+  MapView map(parent.reader(), e.value, e.path, e.key_mark,
+              {"shape", "size_m", "radius_m", "inner_radius_m", "refinements"});
+  if (!map.valid()) return;
+  if (!map.choice("shape", out.shape, kShapes, Need::required)) return;
+  map.integer("refinements", out.refinements, {0, 6}, Need::optional);
+  switch (out.shape) {
+    case GeneratedShape::box: {
+      reject_keys(map, {"radius_m", "inner_radius_m"}, "by shape box (it takes size_m)");
+      if (map.vec3("size_m", out.size_m, Need::required)) {
+        for (double s : out.size_m)
+          if (!(s > 0)) {
+            const Entry size = map.entry("size_m");
+            map.reader().error(size.value_mark, size.path,
+                               "every edge length must be > 0, got " + format_number(s));
+            break;
+          }
+      }
+      break;
+    }
+    case GeneratedShape::ball:
+      reject_keys(map, {"size_m", "inner_radius_m"}, "by shape ball (it takes radius_m)");
+      map.number("radius_m", out.radius_m, Range::positive(), Need::required);
+      break;
+    case GeneratedShape::shell:
+      reject_keys(map, {"size_m"}, "by shape shell (it takes radius_m and inner_radius_m)");
+      if (map.number("radius_m", out.radius_m, Range::positive(), Need::required) &&
+          map.number("inner_radius_m", out.inner_radius_m, Range::positive(), Need::required) &&
+          out.inner_radius_m >= out.radius_m) {
+        const Entry inner = map.entry("inner_radius_m");
+        map.reader().error(inner.value_mark, inner.path,
+                           "must be smaller than radius_m (" + format_number(out.radius_m) +
+                               "), got " + format_number(out.inner_radius_m));
+      }
+      break;
+  }
+}
+
+void read_meshing(MapView& parent, MeshingOptions& out) {
+  const Entry e = parent.entry("meshing");
+  MapView map(parent.reader(), e.value, e.path, e.key_mark,
+              {"target_size_m", "threshold", "label", "smoothing", "smoothing_sigma_m"});
+  if (!map.valid()) return;
+  map.number("target_size_m", out.target_size_m, Range::positive());
+  if (map.has("threshold")) {
+    double threshold = 0;
+    if (map.number("threshold", threshold, Range::any())) out.threshold = threshold;
+  }
+  if (map.has("label")) {
+    int label = 0;
+    if (map.integer("label", label, {0, 65535})) out.label = label;
+  }
+  if (out.threshold && out.label) {
+    const Entry label = map.entry("label");
+    map.reader().error(label.key_mark, label.path,
+                       "give either threshold (an intensity volume) or label (a label map), not both");
+  }
+  map.choice("smoothing", out.smoothing, kFilters);
+  map.number("smoothing_sigma_m", out.smoothing_sigma_m, Range::positive());
+}
+
+void read_mesh(MapView& scene, MeshSpec& out) {
+  const Entry e = scene.entry("mesh");
+  out.where = {e.key_mark.line + 1, e.key_mark.column + 1};
+  MapView map(scene.reader(), e.value, e.path, e.key_mark,
+              {"file", "volume", "generate", "meshing", "element"});
+  if (!map.valid()) return;
+  const int sources = int(map.has("file")) + int(map.has("volume")) + int(map.has("generate"));
+  if (sources != 1) {
+    map.reader().error(map.mark(), map.path(),
+                       sources == 0 ? "give the mesh as one of file, volume or generate"
+                                    : "give only one of file, volume or generate");
+    return;
+  }
+  map.choice("element", out.element, kElements);
+  if (map.has("file")) {
+    out.source = MeshSource::file;
+    map.existing_path("file", out.path, Need::required, {".msh", ".vtu"});
+  } else if (map.has("volume")) {
+    out.source = MeshSource::volume;
+    map.existing_path("volume", out.path, Need::required, {".mha", ".mhd", ".vti", ".nrrd", ".nhdr"},
+                      /*allow_directory=*/true);
+  } else {
+    out.source = MeshSource::generated;
+    read_generated(map, out.generated);
+  }
+  if (map.has("meshing")) {
+    if (out.source == MeshSource::volume) {
+      read_meshing(map, out.meshing);
+    } else {
+      const Entry meshing = map.entry("meshing");
+      map.reader().error(meshing.key_mark, meshing.path,
+                         "meshing options apply only to a mesh made from a volume (mesh.volume)");
+    }
+  }
+}
+
+// ---- material -----------------------------------------------------------------------------------
+
+void read_material(MapView& scene, Material& out) {
+  const Entry e = scene.entry("material");
+  MapView map(scene.reader(), e.value, e.path, e.key_mark,
+              {"model", "youngs_modulus_pa", "poisson_ratio", "c10_pa", "c01_pa", "bulk_modulus_pa",
+               "density_kg_per_m3"});
+  if (!map.valid()) return;
+  map.number("density_kg_per_m3", out.density_kg_per_m3, Range::positive());
+  if (!map.choice("model", out.model, kModels, Need::required)) return;
+  if (out.model == MaterialModel::mooney_rivlin) {
+    reject_keys(map, {"youngs_modulus_pa", "poisson_ratio"},
+                "by mooney_rivlin (it takes c10_pa, c01_pa and bulk_modulus_pa)");
+    map.number("c10_pa", out.c10_pa, Range::positive(), Need::required);
+    map.number("c01_pa", out.c01_pa, Range::non_negative(), Need::required);
+    map.number("bulk_modulus_pa", out.bulk_modulus_pa, Range::positive(), Need::required);
+  } else {
+    reject_keys(map, {"c10_pa", "c01_pa", "bulk_modulus_pa"},
+                std::string("by ") + name_of(kModels, out.model) +
+                    " (it takes youngs_modulus_pa and poisson_ratio)");
+    map.number("youngs_modulus_pa", out.youngs_modulus_pa, Range::positive(), Need::required);
+    // The bounds of an isotropic solid: K > 0 and mu > 0 with E > 0 give -1 < nu < 0.5.
+    map.number("poisson_ratio", out.poisson_ratio, {-1, 0.5, true, true}, Need::required);
+  }
+}
+
+// ---- effects ------------------------------------------------------------------------------------
+
+void read_effect_parameters(Reader& reader, Effect effect, const Entry& e, Effects& out) {
+  switch (effect) {
+    case Effect::gravity: {
+      MapView map(reader, e.value, e.path, e.key_mark, {"acceleration_m_per_s2"});
+      if (map.valid()) map.vec3("acceleration_m_per_s2", out.gravity_m_per_s2);
+      break;
+    }
+    case Effect::inertia: {
+      MapView map(reader, e.value, e.path, e.key_mark, {"integrator", "hht_alpha"});
+      if (!map.valid()) break;
+      map.choice("integrator", out.integrator, kIntegrators);
+      if (map.has("hht_alpha") && out.integrator != TimeIntegrator::hht)
+        reject_keys(map, {"hht_alpha"}, "unless integrator is hht");
+      else
+        map.number("hht_alpha", out.hht_alpha, {-1.0 / 3.0, 0, false, false});
+      break;
+    }
+    case Effect::damping: {
+      MapView map(reader, e.value, e.path, e.key_mark,
+                  {"mass_coefficient_per_s", "stiffness_coefficient_s"});
+      if (!map.valid()) break;
+      map.number("mass_coefficient_per_s", out.rayleigh_mass_per_s, Range::non_negative());
+      map.number("stiffness_coefficient_s", out.rayleigh_stiffness_s, Range::non_negative());
+      break;
+    }
+    case Effect::cavity: {
+      MapView map(reader, e.value, e.path, e.key_mark,
+                  {"surface", "law", "initial_pressure_pa", "bulk_modulus_pa"});
+      if (!map.valid()) break;
+      if (map.text("surface", out.cavity_surface, Need::required) && out.cavity_surface.empty())
+        reader.error(map.entry("surface").value_mark, map.child_path("surface"),
+                     "expected the name of the mesh's physical group that bounds the cavity");
+      map.choice("law", out.cavity_law, kLaws);
+      map.number("initial_pressure_pa", out.cavity_initial_pressure_pa, Range::non_negative());
+      map.number("bulk_modulus_pa", out.cavity_bulk_modulus_pa, Range::positive());
+      break;
+    }
+    default:
+      reader.error(e.value_mark, e.path,
+                   std::string("effect '") + name_of(kEffects, effect) + "' takes no parameters");
+  }
+}
+
+void read_effects(MapView& scene, Effects& out) {
+  const Entry e = scene.entry("effects");
+  Reader& reader = scene.reader();
+  if (e.value.IsNull()) return;  // "effects:" with nothing: elasticity only
+  if (!e.value.IsSequence()) {
+    reader.error(e.value_mark, e.path,
+                 "expected a list of effects (- gravity, - contact, ...), got " +
+                     detail::describe_node(e.value));
+    return;
+  }
+  std::vector<std::string> names;
+  for (const auto& c : kEffects) names.push_back(c.first);
+  std::set<Effect> seen;
+  for (size_t i = 0; i < e.value.size(); ++i) {
+    const YAML::Node item = e.value[i];
+    const std::string item_path = e.path + "[" + std::to_string(i) + "]";
+    Entry name_entry;  // the effect's name, written alone or as the single key of a mapping
+    Entry parameters;
+    name_entry.path = item_path;
+    name_entry.value_mark = name_entry.key_mark = item.Mark();
+    if (item.IsScalar()) {
+      name_entry.value.reset(item);
+    } else if (item.IsMap() && item.size() == 1) {
+      name_entry.value.reset(item.begin()->first);
+      name_entry.value_mark = item.begin()->first.Mark();
+      parameters.present = true;
+      parameters.key_mark = name_entry.value_mark;
+      parameters.value.reset(item.begin()->second);
+      parameters.value_mark = item.begin()->second.IsNull() ? name_entry.value_mark
+                                                            : item.begin()->second.Mark();
+    } else {
+      reader.error(item.Mark(), item_path,
+                   "expected an effect name, or one name with its parameters (- gravity: "
+                   "{acceleration_m_per_s2: [0, 0, -9.81]}), got " + detail::describe_node(item));
+      continue;
+    }
+    auto word = detail::read_text(reader, name_entry);
+    if (!word) continue;
+    auto found = std::find(names.begin(), names.end(), *word);
+    if (found == names.end()) {
+      std::string message = "unknown effect '" + *word + "'; effects are elasticity, gravity, "
+                            "inertia, damping, incompressibility, cavity and contact";
+      const std::string suggestion = closest_match(*word, names);
+      if (!suggestion.empty()) message += "; did you mean '" + suggestion + "'?";
+      reader.error(name_entry.value_mark, item_path, message);
+      continue;
+    }
+    const Effect effect = kEffects[found - names.begin()].second;
+    const std::string effect_path = e.path + "." + *word;
+    if (!seen.insert(effect).second) {
+      reader.error(name_entry.value_mark, effect_path, "effect '" + *word + "' is listed twice");
+      continue;
+    }
+    out.listed.push_back(effect);
+    if (parameters.present && !parameters.value.IsNull()) {
+      parameters.path = effect_path;
+      read_effect_parameters(reader, effect, parameters, out);
+    } else if (effect == Effect::cavity) {
+      reader.error(name_entry.value_mark, effect_path,
+                   "a cavity needs its surface: - cavity: {surface: <physical group>}");
+    }
+  }
+}
+
+// ---- boundary -----------------------------------------------------------------------------------
+
+void read_selector(MapView& parent, Selector& out) {
+  const Entry e = parent.entry("select");
+  Reader& reader = parent.reader();
+  MapView map(reader, e.value, e.path, e.key_mark, {"box", "physical_group", "plane"});
+  if (!map.valid()) return;
+  const int kinds = int(map.has("box")) + int(map.has("physical_group")) + int(map.has("plane"));
+  if (kinds != 1) {
+    reader.error(map.mark(), map.path(),
+                 kinds == 0 ? "select the region by one of box, physical_group or plane"
+                            : "select the region by only one of box, physical_group or plane");
+    return;
+  }
+  if (map.has("physical_group")) {
+    out.kind = SelectorKind::physical_group;
+    if (map.text("physical_group", out.physical_group) && out.physical_group.empty())
+      reader.error(map.entry("physical_group").value_mark, map.child_path("physical_group"),
+                   "expected the name of a physical group of the mesh");
+  } else if (map.has("box")) {
+    out.kind = SelectorKind::box;
+    const Entry box_entry = map.entry("box");
+    MapView box(reader, box_entry.value, box_entry.path, box_entry.key_mark, {"min", "max"});
+    if (box.valid() && box.vec3("min", out.box_min, Need::required) &&
+        box.vec3("max", out.box_max, Need::required)) {
+      for (int i = 0; i < 3; ++i)
+        if (!(out.box_min[i] < out.box_max[i])) {
+          reader.error(box.entry("max").value_mark, box.child_path("max"),
+                       "each component of max must exceed min's; component " + std::to_string(i) +
+                           " has min " + format_number(out.box_min[i]) + " and max " +
+                           format_number(out.box_max[i]));
+          break;
+        }
+    }
+  } else {
+    out.kind = SelectorKind::plane;
+    const Entry plane_entry = map.entry("plane");
+    MapView plane(reader, plane_entry.value, plane_entry.path, plane_entry.key_mark,
+                  {"point", "normal", "tolerance_m"});
+    if (!plane.valid()) return;
+    plane.vec3("point", out.plane_point, Need::required);
+    if (plane.vec3("normal", out.plane_normal, Need::required)) {
+      const auto& n = out.plane_normal;
+      const double length = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+      if (length == 0)
+        reader.error(plane.entry("normal").value_mark, plane.child_path("normal"),
+                     "the normal must not be the zero vector");
+      else
+        for (double& c : out.plane_normal) c /= length;
+    }
+    plane.number("tolerance_m", out.plane_tolerance_m, Range::positive());
+  }
+}
+
+void read_boundary(MapView& scene, std::vector<BoundaryRegion>& out) {
+  const Entry e = scene.entry("boundary");
+  Reader& reader = scene.reader();
+  if (e.value.IsNull()) return;
+  if (!e.value.IsSequence()) {
+    reader.error(e.value_mark, e.path,
+                 "expected a list of regions (- name: ..., type: fixed, select: ...), got " +
+                     detail::describe_node(e.value));
+    return;
+  }
+  std::set<std::string> names;
+  for (size_t i = 0; i < e.value.size(); ++i) {
+    const YAML::Node item = e.value[i];
+    const std::string path = e.path + "[" + std::to_string(i) + "]";
+    MapView map(reader, item, path, item.Mark(), {"name", "type", "select", "traction_pa"});
+    if (!map.valid()) continue;
+    BoundaryRegion region;
+    region.where = {map.mark().line + 1, map.mark().column + 1};
+    if (map.text("name", region.name, Need::required)) {
+      if (region.name.empty())
+        reader.error(map.entry("name").value_mark, map.child_path("name"), "a name must not be empty");
+      else if (!names.insert(region.name).second)
+        reader.error(map.entry("name").value_mark, map.child_path("name"),
+                     "boundary region name '" + region.name + "' is used twice; names must be unique");
+    }
+    if (map.choice("type", region.type, kBoundaryTypes, Need::required)) {
+      if (region.type == BoundaryType::traction)
+        map.vec3("traction_pa", region.traction_pa, Need::required);
+      else
+        reject_keys(map, {"traction_pa"}, "by a fixed region");
+    }
+    map.require("select", "a box, a physical_group or a plane");
+    if (map.has("select")) read_selector(map, region.select);
+    out.push_back(region);
+  }
+}
+
+// ---- solver and haptics -------------------------------------------------------------------------
+
+void read_solver(MapView& scene, Solver& out) {
+  const Entry e = scene.entry("solver");
+  Reader& reader = scene.reader();
+  MapView map(reader, e.value, e.path, e.key_mark,
+              {"rate_hz", "newton", "linear_solver", "direct_max_dofs"});
+  if (!map.valid()) return;
+  map.number("rate_hz", out.rate_hz, Range::positive());
+  map.choice("linear_solver", out.linear_solver, kLinearSolvers);
+  map.integer("direct_max_dofs", out.direct_max_dofs, {1, 1e9});
+  if (map.has("newton")) {
+    const Entry n = map.entry("newton");
+    MapView newton(reader, n.value, n.path, n.key_mark,
+                   {"relative_tolerance", "absolute_tolerance", "max_iterations", "line_search",
+                    "max_load_step_cuts"});
+    if (!newton.valid()) return;
+    newton.number("relative_tolerance", out.newton_relative_tolerance, {0, 1, true, true});
+    newton.number("absolute_tolerance", out.newton_absolute_tolerance, Range::positive());
+    newton.integer("max_iterations", out.newton_max_iterations, {1, 1000});
+    newton.boolean("line_search", out.line_search);
+    newton.integer("max_load_step_cuts", out.max_load_step_cuts, {0, 30});
+  }
+}
+
+void read_haptics(MapView& scene, Haptics& out) {
+  const Entry e = scene.entry("haptics");
+  Reader& reader = scene.reader();
+  MapView map(reader, e.value, e.path, e.key_mark,
+              {"rate_hz", "local_model", "hold", "gains", "robustness_margin", "max_force_n",
+               "max_force_rate_n_per_s", "watchdog_timeout_s"});
+  if (!map.valid()) return;
+  map.number("rate_hz", out.rate_hz, Range::positive());
+  map.choice("local_model", out.local_model, kLocalModels);
+  map.choice("hold", out.hold, kHolds);
+  map.number("robustness_margin", out.robustness_margin, {0, 1, false, true});
+  map.number("max_force_n", out.max_force_n, Range::positive());
+  map.number("max_force_rate_n_per_s", out.max_force_rate_n_per_s, Range::positive());
+  map.number("watchdog_timeout_s", out.watchdog_timeout_s, Range::positive());
+  if (!map.has("gains")) return;
+  const Entry g = map.entry("gains");
+  if (g.value.IsScalar()) {
+    if (g.value.Scalar() != "auto")
+      reader.error(g.value_mark, g.path,
+                   "expected 'auto' or a mapping {proportional_n_per_m: ..., integral_n_per_m: ...}, "
+                   "got " + detail::describe_node(g.value));
+    return;
+  }
+  MapView gains(reader, g.value, g.path, g.key_mark, {"proportional_n_per_m", "integral_n_per_m"});
+  if (!gains.valid()) return;
+  out.automatic_gains = false;
+  gains.number("proportional_n_per_m", out.proportional_n_per_m, Range::positive(), Need::required);
+  const bool integral = out.local_model == LocalModelType::pi ||
+                        out.local_model == LocalModelType::pi_smith;
+  if (integral)
+    gains.number("integral_n_per_m", out.integral_n_per_m, Range::positive(), Need::required);
+  else
+    reject_keys(gains, {"integral_n_per_m"},
+                std::string("by local model ") + name_of(kLocalModels, out.local_model) +
+                    " (only pi and pi_smith have an integral gain)");
+}
+
+// ---- probes -------------------------------------------------------------------------------------
+
+bool valid_name(const std::string& name) {
+  if (name.empty()) return false;
+  for (char c : name)
+    if (!(std::isalnum(static_cast<unsigned char>(c)) || c == '_' || c == '-')) return false;
+  return true;
+}
+
+void read_device(MapView& probe, Device& out) {
+  const Entry e = probe.entry("device");
+  Reader& reader = probe.reader();
+  MapView map(reader, e.value, e.path, e.key_mark, {"type", "trajectory", "hand", "name"});
+  if (!map.valid()) return;
+  if (!map.choice("type", out.type, kDevices, Need::required)) return;
+  const std::vector<std::string> trajectory_kinds{".csv", ".h5"};
+  switch (out.type) {
+    case DeviceType::replay:
+      reject_keys(map, {"hand", "name"}, "by a replay device");
+      map.existing_path("trajectory", out.trajectory, Need::required, trajectory_kinds);
+      break;
+    case DeviceType::operator_model: {
+      reject_keys(map, {"name"}, "by a virtual operator");
+      map.existing_path("trajectory", out.trajectory, Need::required, trajectory_kinds);
+      if (!map.has("hand")) break;
+      const Entry h = map.entry("hand");
+      MapView hand(reader, h.value, h.path, h.key_mark,
+                   {"mass_kg", "stiffness_n_per_m", "damping_n_s_per_m"});
+      if (!hand.valid()) break;
+      hand.number("mass_kg", out.hand.mass_kg, Range::positive());
+      hand.number("stiffness_n_per_m", out.hand.stiffness_n_per_m, Range::positive());
+      hand.number("damping_n_s_per_m", out.hand.damping_n_s_per_m, Range::non_negative());
+      break;
+    }
+    case DeviceType::phantom:
+      reject_keys(map, {"trajectory", "hand"}, "by a PHANTOM device");
+      map.text("name", out.phantom_name);
+      break;
+    case DeviceType::mouse:
+      reject_keys(map, {"trajectory", "hand", "name"}, "by the mouse");
+      break;
+  }
+}
+
+void read_probes(MapView& scene, std::vector<Probe>& out) {
+  const Entry e = scene.entry("probes");
+  Reader& reader = scene.reader();
+  if (e.value.IsNull()) return;
+  if (!e.value.IsSequence()) {
+    reader.error(e.value_mark, e.path,
+                 "expected a list of probes (- name: ..., device: ...), got " +
+                     detail::describe_node(e.value));
+    return;
+  }
+  std::set<std::string> names;
+  for (size_t i = 0; i < e.value.size(); ++i) {
+    const YAML::Node item = e.value[i];
+    MapView map(reader, item, e.path + "[" + std::to_string(i) + "]", item.Mark(),
+                {"name", "device", "radius_m"});
+    if (!map.valid()) continue;
+    Probe probe;
+    probe.where = {map.mark().line + 1, map.mark().column + 1};
+    if (map.text("name", probe.name, Need::required)) {
+      const Entry name = map.entry("name");
+      if (!valid_name(probe.name))
+        reader.error(name.value_mark, name.path,
+                     "'" + probe.name + "' is not a valid probe name; use letters, digits, _ and -");
+      else if (!names.insert(probe.name).second)
+        reader.error(name.value_mark, name.path,
+                     "probe name '" + probe.name + "' is used twice; probe names must be unique");
+    }
+    map.number("radius_m", probe.radius_m, Range::positive());
+    map.require("device", "where the probe's positions come from");
+    if (map.has("device")) read_device(map, probe.device);
+    out.push_back(probe);
+  }
+}
+
+// ---- cross-field checks -------------------------------------------------------------------------
+
+void check_rates(MapView& scene, const Scene& s) {
+  const double ratio = s.haptics.rate_hz / s.solver.rate_hz;
+  const double whole = std::round(ratio);
+  if (ratio >= 1 && std::abs(ratio - whole) <= 1e-9 * ratio) return;
+  Entry where = scene.entry("solver");
+  if (where.present && where.value.IsMap()) {
+    MapView solver(scene.reader(), where.value, where.path, where.value_mark,
+                   {"rate_hz", "newton", "linear_solver", "direct_max_dofs"});
+    where = solver.entry("rate_hz");
+    where.path = "solver.rate_hz";
+  }
+  scene.reader().error(where.value_mark, "solver.rate_hz",
+                       "the haptic rate (" + format_number(s.haptics.rate_hz) +
+                           " Hz) must be a whole multiple of the solver rate (" +
+                           format_number(s.solver.rate_hz) + " Hz); " +
+                           format_number(s.haptics.rate_hz / std::max(1.0, whole)) +
+                           " Hz would give N = " + format_number(std::max(1.0, whole)));
+}
+
+void check_cross_fields(MapView& scene, Scene& s) {
+  Reader& reader = scene.reader();
+  check_rates(scene, s);
+  if (!s.probes.empty() && !s.effects.has(Effect::contact))
+    reader.warning(scene.entry("effects").key_mark, "effects",
+                   "probes are defined but 'contact' is not among the effects, so they will not "
+                   "touch the tissue");
+  if (s.effects.has(Effect::incompressibility) &&
+      s.material.model != MaterialModel::neo_hookean_incompressible &&
+      s.material.model != MaterialModel::mooney_rivlin)
+    reader.warning(scene.entry("effects").key_mark, "effects",
+                   "incompressibility is meant for neo_hookean_incompressible or mooney_rivlin");
+}
+
+}  // namespace
+
+bool Effects::has(Effect effect) const {
+  if (effect == Effect::elasticity) return true;
+  return std::find(listed.begin(), listed.end(), effect) != listed.end();
+}
+
+int Haptics::ratio(const Solver& solver) const {
+  return static_cast<int>(std::lround(rate_hz / solver.rate_hz));
+}
+
+LoadedScene parse_scene(const std::string& text, const std::string& label,
+                        const std::filesystem::path& base_dir) {
+  Reader reader(label, base_dir);
+  YAML::Node root;
+  try {
+    root = YAML::Load(text);
+  } catch (const YAML::ParserException& error) {
+    reader.error(error.mark, "", "YAML syntax: " + error.msg);
+    throw SceneError(reader.diagnostics());
+  }
+  if (root.IsNull()) {
+    reader.error(YAML::Mark::null_mark(), "",
+                 "the scene is empty; it needs at least a mesh and a material");
+    throw SceneError(reader.diagnostics());
+  }
+
+  LoadedScene loaded;
+  Scene& s = loaded.scene;
+  s.text = text;
+  MapView scene(reader, root, "", root.Mark(),
+                {"name", "description", "units", "mesh", "material", "effects", "boundary",
+                 "solver", "haptics", "probes"});
+  if (scene.valid()) {
+    scene.text("name", s.name);
+    scene.text("description", s.description);
+    std::string units = "SI";
+    if (scene.text("units", units) && units != "SI")
+      reader.error(scene.entry("units").value_mark, "units",
+                   "only SI is supported (m, N, s, Pa, kg), got '" + units + "'");
+    scene.require("mesh", "file, volume or generate");
+    scene.require("material", "the tissue's constitutive model and parameters");
+    if (scene.has("mesh")) read_mesh(scene, s.mesh);
+    if (scene.has("material")) read_material(scene, s.material);
+    if (scene.has("effects")) read_effects(scene, s.effects);
+    if (scene.has("boundary")) read_boundary(scene, s.boundary);
+    if (scene.has("solver")) read_solver(scene, s.solver);
+    if (scene.has("haptics")) read_haptics(scene, s.haptics);
+    if (scene.has("probes")) read_probes(scene, s.probes);
+    check_cross_fields(scene, s);
+  }
+
+  std::vector<Diagnostic> errors;
+  for (auto& d : reader.diagnostics()) {
+    if (d.severity == Diagnostic::Severity::error) errors.push_back(d);
+    else loaded.warnings.push_back(d);
+  }
+  if (!errors.empty()) {
+    // Sorted by position so the messages read top to bottom like the file.
+    std::stable_sort(errors.begin(), errors.end(), [](const Diagnostic& a, const Diagnostic& b) {
+      return std::tie(a.line, a.column) < std::tie(b.line, b.column);
+    });
+    errors.insert(errors.end(), loaded.warnings.begin(), loaded.warnings.end());
+    throw SceneError(std::move(errors));
+  }
+  return loaded;
+}
+
+LoadedScene load_scene(const std::filesystem::path& file) {
+  const std::string label = file.string();
+  std::ifstream in(file, std::ios::binary);
+  std::error_code ec;
+  if (!in || std::filesystem::is_directory(file, ec)) {
+    Diagnostic d;
+    d.file = label;
+    d.message = std::filesystem::exists(file, ec) ? "cannot read the scene file"
+                                                  : "no such scene file";
+    throw SceneError({d});
+  }
+  std::ostringstream text;
+  text << in.rdbuf();
+  const auto absolute = std::filesystem::absolute(file).lexically_normal();
+  LoadedScene loaded = parse_scene(text.str(), label, absolute.parent_path());
+  loaded.scene.source = absolute;
+  return loaded;
+}
+
+// ---- names --------------------------------------------------------------------------------------
+
+const char* to_string(MeshSource v) {
+  switch (v) {
+    case MeshSource::file: return "file";
+    case MeshSource::volume: return "volume";
+    case MeshSource::generated: return "generate";
+  }
+  return "?";
+}
+const char* to_string(ElementType v) { return name_of(kElements, v); }
+const char* to_string(GeneratedShape v) { return name_of(kShapes, v); }
+const char* to_string(SmoothingFilter v) { return name_of(kFilters, v); }
+const char* to_string(MaterialModel v) { return name_of(kModels, v); }
+const char* to_string(Effect v) { return name_of(kEffects, v); }
+const char* to_string(TimeIntegrator v) { return name_of(kIntegrators, v); }
+const char* to_string(PressureVolumeLaw v) { return name_of(kLaws, v); }
+const char* to_string(BoundaryType v) { return name_of(kBoundaryTypes, v); }
+const char* to_string(SelectorKind v) {
+  switch (v) {
+    case SelectorKind::box: return "box";
+    case SelectorKind::physical_group: return "physical_group";
+    case SelectorKind::plane: return "plane";
+  }
+  return "?";
+}
+const char* to_string(LinearSolver v) { return name_of(kLinearSolvers, v); }
+const char* to_string(LocalModelType v) { return name_of(kLocalModels, v); }
+const char* to_string(HoldType v) { return name_of(kHolds, v); }
+const char* to_string(DeviceType v) { return name_of(kDevices, v); }
+
+}  // namespace fetouch::config

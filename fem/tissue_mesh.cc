@@ -1,0 +1,191 @@
+#include "fem/tissue_mesh_builder.h"
+
+#include <deal.II/grid/grid_generator.h>
+#include <deal.II/grid/grid_in.h>
+#include <deal.II/grid/grid_tools.h>
+#include <deal.II/grid/manifold_lib.h>
+
+#include <gmsh.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+
+namespace fetouch::fem {
+
+namespace {
+
+using dealii::Point;
+using dealii::Triangulation;
+
+bool wants_simplex(config::ElementType element) {
+  return element == config::ElementType::p1 || element == config::ElementType::p2;
+}
+
+// Names of the physical groups of a Gmsh file, keyed by tag; deal.II's read_msh turns the tags into
+// boundary ids but drops the names.
+std::map<std::string, unsigned int> gmsh_surface_groups(const std::string& file) {
+  std::map<std::string, unsigned int> names;
+  gmsh::initialize();
+  gmsh::option::setNumber("General.Terminal", 0);
+  try {
+    gmsh::open(file);
+    gmsh::vectorpair groups;
+    gmsh::model::getPhysicalGroups(groups, 2);
+    for (const auto& [dim, tag] : groups) {
+      std::string name;
+      gmsh::model::getPhysicalName(dim, tag, name);
+      names[name.empty() ? "group " + std::to_string(tag) : name] = static_cast<unsigned int>(tag);
+    }
+  } catch (...) {
+    gmsh::finalize();
+    throw std::runtime_error(file + ": Gmsh could not read its physical groups");
+  }
+  gmsh::finalize();
+  return names;
+}
+
+// deal.II's exception text is a page (condition, backtrace); users need its "Additional information".
+std::string short_message(const std::exception& e) {
+  std::string text = e.what();
+  const std::string marker = "Additional information:";
+  auto start = text.find(marker);
+  if (start == std::string::npos) return text;
+  start += marker.size();
+  auto end = text.find("Stacktrace", start);
+  std::string info = text.substr(start, end == std::string::npos ? std::string::npos : end - start);
+  std::string collapsed;
+  for (char c : info) {
+    if (c == '\n' || c == '\t') c = ' ';
+    if (c == ' ' && (collapsed.empty() || collapsed.back() == ' ')) continue;
+    collapsed += c;
+  }
+  while (!collapsed.empty() && (collapsed.back() == ' ' || collapsed.back() == '-'))
+    collapsed.pop_back();
+  return collapsed;
+}
+
+// Boundary ids from geometry, the same for hexahedra and tetrahedra (deal.II 9.4 does not colorize
+// simplex boxes): box faces 0..5 = xmin, xmax, ymin, ymax, zmin, zmax; ball 0; shell inner 0, outer 1.
+void name_boundaries(const config::GeneratedMesh& g, Triangulation<3>& tria) {
+  for (const auto& cell : tria.active_cell_iterators())
+    for (const auto f : cell->face_indices()) {
+      if (!cell->face(f)->at_boundary()) continue;
+      const Point<3> c = cell->face(f)->center();
+      unsigned int id = 0;
+      if (g.shape == config::GeneratedShape::box) {
+        double best = std::numeric_limits<double>::max();
+        for (unsigned int d = 0; d < 3; ++d) {
+          if (std::abs(c[d]) < best) best = std::abs(c[d]), id = 2 * d;
+          if (std::abs(c[d] - g.size_m[d]) < best) best = std::abs(c[d] - g.size_m[d]), id = 2 * d + 1;
+        }
+      } else if (g.shape == config::GeneratedShape::shell) {
+        id = c.norm() < 0.5 * (g.inner_radius_m + g.radius_m) ? 0 : 1;
+      }
+      cell->face(f)->set_boundary_id(dealii::types::boundary_id(id));
+    }
+}
+
+void generate(const config::GeneratedMesh& g, bool simplex, Triangulation<3>& tria,
+              std::map<std::string, unsigned int>& names) {
+  switch (g.shape) {
+    case config::GeneratedShape::box: {
+      // Cells roughly cubic: the shortest edge gets 2^refinements cells, the others in proportion.
+      const double shortest = std::min({g.size_m[0], g.size_m[1], g.size_m[2]});
+      std::vector<unsigned int> repetitions(3);
+      for (int d = 0; d < 3; ++d)
+        repetitions[d] = std::max(1u, static_cast<unsigned int>(std::lround(
+                                          g.size_m[d] / shortest * (1u << g.refinements))));
+      const Point<3> low(0, 0, 0), high(g.size_m[0], g.size_m[1], g.size_m[2]);
+      if (simplex)
+        dealii::GridGenerator::subdivided_hyper_rectangle_with_simplices(tria, repetitions, low, high);
+      else
+        dealii::GridGenerator::subdivided_hyper_rectangle(tria, repetitions, low, high);
+      name_boundaries(g, tria);
+      const char* faces[] = {"xmin", "xmax", "ymin", "ymax", "zmin", "zmax"};
+      for (unsigned int i = 0; i < 6; ++i) names[faces[i]] = i;
+      return;
+    }
+    case config::GeneratedShape::ball:
+    case config::GeneratedShape::shell: {
+      Triangulation<3> hex;
+      if (g.shape == config::GeneratedShape::ball) {
+        dealii::GridGenerator::hyper_ball_balanced(hex, Point<3>(), g.radius_m);
+        names["surface"] = 0;
+      } else {
+        dealii::GridGenerator::hyper_shell(hex, Point<3>(), g.inner_radius_m, g.radius_m, 12);
+        names["inner"] = 0;
+        names["outer"] = 1;
+      }
+      // Refinement follows the spherical manifolds; the result is then frozen as straight-sided
+      // cells, so that hexahedral and tetrahedral versions have the same vertices.
+      hex.refine_global(static_cast<unsigned int>(std::max(0, g.refinements - 1)));
+      Triangulation<3> flat;
+      dealii::GridGenerator::flatten_triangulation(hex, flat);
+      if (simplex)
+        dealii::GridGenerator::convert_hypercube_to_simplex_mesh(flat, tria);
+      else
+        tria.copy_triangulation(flat);
+      name_boundaries(g, tria);
+      return;
+    }
+  }
+}
+
+}  // namespace
+
+TissueMeshInfo build_tissue_mesh(const config::MeshSpec& spec, Triangulation<3>& tria) {
+  tria.clear();
+  TissueMeshInfo info;
+  const bool simplex = wants_simplex(spec.element);
+  switch (spec.source) {
+    case config::MeshSource::generated:
+      try {
+        generate(spec.generated, simplex, tria, info.boundary_ids);
+      } catch (const std::exception& e) {
+        throw std::runtime_error("deal.II could not generate the mesh: " + short_message(e));
+      }
+      break;
+    case config::MeshSource::file: {
+      const std::string file = spec.path.string();
+      if (spec.path.extension() != ".msh")
+        throw std::runtime_error(file + ": the solver reads Gmsh .msh meshes; convert .vtu with "
+                                        "`gmsh -3 -format msh4`");
+      dealii::GridIn<3> in;
+      in.attach_triangulation(tria);
+      try {
+        in.read_msh(file);
+      } catch (const std::exception& e) {
+        throw std::runtime_error(file + ": deal.II could not read it: " + short_message(e));
+      }
+      info.boundary_ids = gmsh_surface_groups(file);
+      break;
+    }
+    case config::MeshSource::volume:
+      throw std::runtime_error(spec.path.string() +
+                               ": a volume must be meshed first (fetouch mesh VOLUME -o MESH)");
+  }
+
+  info.simplex = tria.all_reference_cells_are_simplex();
+  if (simplex != info.simplex)
+    throw std::runtime_error(std::string("element ") + config::to_string(spec.element) + " needs " +
+                             (simplex ? "tetrahedra" : "hexahedra") + " but the mesh has " +
+                             (info.simplex ? "tetrahedra" : "hexahedra or mixed cells"));
+  info.cells = tria.n_active_cells();
+  info.vertices = tria.n_used_vertices();
+  // cell->measure() is exact for tetrahedra and trilinear hexahedra; GridTools::volume() would need a
+  // mapping suited to the reference cell (its default, MappingQ1, fails on simplices).
+  info.volume_m3 = 0;
+  for (const auto& cell : tria.active_cell_iterators()) info.volume_m3 += cell->measure();
+  info.min_diameter_m = dealii::GridTools::minimal_cell_diameter(tria);
+  info.max_diameter_m = dealii::GridTools::maximal_cell_diameter(tria);
+  return info;
+}
+
+TissueMeshInfo inspect_tissue_mesh(const config::MeshSpec& spec) {
+  Triangulation<3> tria;
+  return build_tissue_mesh(spec, tria);
+}
+
+}  // namespace fetouch::fem

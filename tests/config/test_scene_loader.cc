@@ -1,0 +1,140 @@
+// The loader on valid scenes (values, defaults, resolved paths) and on the failures that are not a
+// single broken line (several errors at once, empty and missing files, warnings).
+#include <gtest/gtest.h>
+
+#include <fstream>
+
+#include "config/scene_loader.h"
+
+namespace fetouch::config {
+namespace {
+
+const std::filesystem::path kSource = FETOUCH_SOURCE_DIR;
+const std::filesystem::path kData = FETOUCH_TEST_DATA_DIR;
+
+TEST(SceneLoader, ShippedScenesAreValid) {
+  int scenes = 0;
+  for (const auto& entry : std::filesystem::directory_iterator(kSource / "config/scenes")) {
+    if (entry.path().extension() != ".yaml") continue;
+    ++scenes;
+    EXPECT_NO_THROW(load_scene(entry.path())) << entry.path();
+  }
+  EXPECT_GE(scenes, 1);
+}
+
+TEST(SceneLoader, ReadsEveryValueOfTheBaseScene) {
+  const LoadedScene loaded = load_scene(kData / "config/valid/base.yaml");
+  const Scene& s = loaded.scene;
+  EXPECT_TRUE(loaded.warnings.empty());
+  EXPECT_EQ(s.name, "broken_example");
+  EXPECT_EQ(s.mesh.source, MeshSource::generated);
+  EXPECT_EQ(s.mesh.generated.shape, GeneratedShape::box);
+  EXPECT_DOUBLE_EQ(s.mesh.generated.size_m[1], 0.08);
+  EXPECT_EQ(s.mesh.generated.refinements, 1);
+  EXPECT_EQ(s.mesh.where.line, 4);  // "mesh:" is line 4 of the file (one comment line above)
+  EXPECT_EQ(s.material.model, MaterialModel::neo_hookean);
+  EXPECT_DOUBLE_EQ(s.material.youngs_modulus_pa, 5000);
+  EXPECT_DOUBLE_EQ(s.material.poisson_ratio, 0.45);
+  EXPECT_TRUE(s.effects.has(Effect::contact));
+  EXPECT_TRUE(s.effects.has(Effect::elasticity));  // always simulated
+  EXPECT_FALSE(s.effects.has(Effect::gravity));
+  ASSERT_EQ(s.boundary.size(), 1u);
+  EXPECT_EQ(s.boundary[0].select.kind, SelectorKind::physical_group);
+  EXPECT_EQ(s.boundary[0].select.physical_group, "zmin");
+  EXPECT_EQ(s.haptics.ratio(s.solver), 50);
+  EXPECT_EQ(s.haptics.local_model, LocalModelType::pi);
+  EXPECT_TRUE(s.haptics.automatic_gains);
+  ASSERT_EQ(s.probes.size(), 1u);
+  EXPECT_EQ(s.probes[0].device.type, DeviceType::replay);
+  // Relative paths resolve against the scene file's folder, not the working directory.
+  EXPECT_EQ(s.probes[0].device.trajectory, (kData / "data/poke.csv").lexically_normal());
+  EXPECT_TRUE(s.source.is_absolute());
+  EXPECT_NE(s.text.find("broken_example"), std::string::npos);  // kept for recordings
+}
+
+TEST(SceneLoader, DefaultsForOptionalSections) {
+  const auto loaded = parse_scene(
+      "mesh: {generate: {shape: ball, radius_m: 0.04}}\n"
+      "material: {model: linear_elastic, youngs_modulus_pa: 3000, poisson_ratio: 0.3}\n",
+      "inline", kData);
+  const Scene& s = loaded.scene;
+  EXPECT_EQ(s.mesh.element, ElementType::p1);
+  EXPECT_DOUBLE_EQ(s.solver.rate_hz, 20);
+  EXPECT_DOUBLE_EQ(s.haptics.rate_hz, 1000);
+  EXPECT_DOUBLE_EQ(s.haptics.robustness_margin, 0.3);
+  EXPECT_DOUBLE_EQ(s.material.density_kg_per_m3, 1000);
+  EXPECT_TRUE(s.probes.empty());
+}
+
+TEST(SceneLoader, ReportsEveryErrorOfAFileAtOnce) {
+  try {
+    parse_scene(
+        "mesh: {generate: {shape: box, size_m: [1, 1, 1]}}\n"             // line 1: fine
+        "material: {model: neo_hookean, youngs_modulus_pa: -1, poisson_ratio: 0.7}\n"  // 2: two
+        "haptics: {hold: zzz}\n",                                         // line 3: one
+        "inline", kData);
+    FAIL() << "accepted";
+  } catch (const SceneError& e) {
+    ASSERT_EQ(e.diagnostics().size(), 3u) << e.what();
+    EXPECT_EQ(e.diagnostics()[0].line, 2);
+    EXPECT_EQ(e.diagnostics()[1].line, 2);
+    EXPECT_EQ(e.diagnostics()[2].line, 3);
+    EXPECT_EQ(e.diagnostics()[2].key, "haptics.hold");
+  }
+}
+
+TEST(SceneLoader, EmptyAndMissingFilesAreErrors) {
+  EXPECT_THROW(parse_scene("", "empty.yaml", kData), SceneError);
+  EXPECT_THROW(parse_scene("# only a comment\n", "empty.yaml", kData), SceneError);
+  try {
+    load_scene(kData / "config/no_such_scene.yaml");
+    FAIL();
+  } catch (const SceneError& e) {
+    EXPECT_NE(std::string(e.what()).find("no such scene file"), std::string::npos);
+  }
+  EXPECT_THROW(parse_scene("- just\n- a list\n", "list.yaml", kData), SceneError);
+}
+
+TEST(SceneLoader, WarnsAboutProbesWithoutContact) {
+  const auto loaded = parse_scene(
+      "mesh: {generate: {shape: box, size_m: [1, 1, 1]}}\n"
+      "material: {model: linear_elastic, youngs_modulus_pa: 3000, poisson_ratio: 0.3}\n"
+      "probes: [{name: a, device: {type: mouse}}]\n",
+      "inline", kData);
+  ASSERT_EQ(loaded.warnings.size(), 1u);
+  EXPECT_NE(loaded.warnings[0].message.find("contact"), std::string::npos);
+}
+
+TEST(SceneLoader, RateRatioMustBeWhole) {
+  const std::string head =
+      "mesh: {generate: {shape: box, size_m: [1, 1, 1]}}\n"
+      "material: {model: linear_elastic, youngs_modulus_pa: 3000, poisson_ratio: 0.3}\n";
+  EXPECT_EQ(parse_scene(head + "solver: {rate_hz: 25}\n", "s", kData).scene.haptics.ratio(
+                parse_scene(head + "solver: {rate_hz: 25}\n", "s", kData).scene.solver),
+            40);
+  EXPECT_NO_THROW(parse_scene(head + "solver: {rate_hz: 1000}\n", "s", kData));  // N = 1: the ideal
+  EXPECT_THROW(parse_scene(head + "solver: {rate_hz: 15}\n", "s", kData), SceneError);
+  EXPECT_THROW(parse_scene(head + "solver: {rate_hz: 20}\nhaptics: {rate_hz: 990.5}\n", "s", kData),
+               SceneError);
+}
+
+TEST(SceneLoader, EffectParameters) {
+  const auto s = parse_scene(
+                     "mesh: {generate: {shape: shell, radius_m: 0.05, inner_radius_m: 0.04}}\n"
+                     "material: {model: mooney_rivlin, c10_pa: 800, c01_pa: 200, bulk_modulus_pa: 1e5}\n"
+                     "effects:\n"
+                     "  - gravity: {acceleration_m_per_s2: [0, -9.81, 0]}\n"
+                     "  - inertia: {integrator: hht, hht_alpha: -0.2}\n"
+                     "  - cavity: {surface: inner, law: isothermal_gas, initial_pressure_pa: 1000}\n",
+                     "inline", kData)
+                     .scene;
+  EXPECT_DOUBLE_EQ(s.effects.gravity_m_per_s2[1], -9.81);
+  EXPECT_EQ(s.effects.integrator, TimeIntegrator::hht);
+  EXPECT_DOUBLE_EQ(s.effects.hht_alpha, -0.2);
+  EXPECT_EQ(s.effects.cavity_surface, "inner");
+  EXPECT_EQ(s.effects.cavity_law, PressureVolumeLaw::isothermal_gas);
+  EXPECT_DOUBLE_EQ(s.material.c10_pa, 800);
+}
+
+}  // namespace
+}  // namespace fetouch::config
