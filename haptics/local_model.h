@@ -1,0 +1,65 @@
+// The local model: renders force at every haptic tick from the device position and the surface
+// held from the slow environment. All four variants share one state, so one block holds them:
+//
+//   penetration     e(k) = x_h(k) - x_p(k)                  (along each contact's normal)
+//   P               F(k) = Kh e(k)
+//   PI              F(k) = Kh e(k) + s(k),   s(k+1) = s(k) + I e(k)       i.e. L(z) = Kh + I/(z-1)
+//   Smith           x_p(k) = x_held(k) + W (F(k) - F_ref(k))   (predicted surface), else x_p = x_held
+//
+// x_held and F_ref come from the hold (hold.h): the newest environment answer and the force that
+// produced it. With the predictor, F(k) appears on both sides; the loop is solved exactly:
+//   (I + Kh W) F(k) = Kh (x_h(k) - x_held(k) + W F_ref(k)) + s(k),
+// with (I + Kh W)^-1 factored once per change of Kh or W, never in the tick.
+//
+// State-space realization per tick, state s (PI variants only), inputs (x_h, x_held, F_ref):
+//   without Smith:  s+ = s + I (x_h - x_held),           F = Kh (x_h - x_held) + s
+//   with Smith:     G = (I + Kh W)^-1,  F = G (Kh (x_h - x_held + W F_ref) + s),
+//                   s+ = s + I (x_h - x_held - W (F - F_ref))
+// Anti-windup: s is clamped to |s| <= s_max per contact; contact loss resets s to 0.
+// Real-time safe after construction: step() allocates nothing.
+#pragma once
+
+#include <Eigen/Dense>
+
+namespace fetouch::haptics {
+
+enum class LocalModelKind { p, pi, smith, pi_smith };
+
+struct LocalModelGains {
+  double proportional = 0;  // Kh
+  double integral = 0;      // I, per tick
+};
+
+class LocalModel {
+ public:
+  LocalModel(LocalModelKind kind, int contacts);
+
+  LocalModelKind kind() const { return kind_; }
+  bool has_integrator() const { return kind_ == LocalModelKind::pi || kind_ == LocalModelKind::pi_smith; }
+  bool has_predictor() const { return kind_ == LocalModelKind::smith || kind_ == LocalModelKind::pi_smith; }
+
+  void set_gains(const LocalModelGains& gains);
+  void set_compliance(const Eigen::MatrixXd& compliance);  // W, for the Smith variants
+  void set_integrator_limit(double limit) { integrator_limit_ = limit; }
+  const LocalModelGains& gains() const { return gains_; }
+
+  // One tick: returns F(k) and advances s.
+  const Eigen::VectorXd& step(const Eigen::VectorXd& device, const Eigen::VectorXd& held_surface,
+                              const Eigen::VectorXd& reference_force) noexcept;
+
+  const Eigen::VectorXd& integrator() const { return integrator_; }
+  void set_integrator(const Eigen::VectorXd& s) { integrator_ = s; }
+  void reset() { integrator_.setZero(); }
+
+ private:
+  void refactor();
+
+  LocalModelKind kind_;
+  LocalModelGains gains_;
+  double integrator_limit_ = 1e300;
+  Eigen::MatrixXd compliance_;       // W
+  Eigen::MatrixXd loop_inverse_;     // (I + Kh W)^-1
+  Eigen::VectorXd integrator_, force_, error_, rhs_;
+};
+
+}  // namespace fetouch::haptics

@@ -1,0 +1,157 @@
+#include "haptics/stability_analysis.h"
+
+#include <Eigen/Eigenvalues>
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+#include "haptics/linear_environment.h"
+#include "haptics/multirate_loop.h"
+
+namespace fetouch::haptics {
+
+namespace {
+
+bool has_integrator(LocalModelKind kind) {
+  return kind == LocalModelKind::pi || kind == LocalModelKind::pi_smith;
+}
+
+// Packing of the frame-boundary state (see the header) into one vector and back. The loop is
+// positioned at a frame boundary j >= 1, just before the promotion of the pending answer.
+struct StatePacking {
+  int m = 1;
+  bool integrator = false;
+  int size() const { return (integrator ? 5 : 4) * m; }
+
+  void unpack(const Eigen::VectorXd& x, MultirateLoop& loop) const {
+    MultirateState& s = loop.state();
+    s.pending_surface = x.segment(0, m);
+    s.held_newest = x.segment(m, m);
+    s.pending_force = x.segment(2 * m, m);
+    s.force_newest = x.segment(3 * m, m);
+    s.held_previous.setZero();  // overwritten by the promotion
+    s.force_previous.setZero();
+    loop.environment().set_surface(s.pending_surface);  // the environment's own memory x_o(j-1)
+    loop.local_model().set_integrator(integrator ? Eigen::VectorXd(x.segment(4 * m, m))
+                                                 : Eigen::VectorXd::Zero(m));
+  }
+
+  Eigen::VectorXd pack(MultirateLoop& loop) const {
+    Eigen::VectorXd x(size());
+    const MultirateState& s = loop.state();
+    x.segment(0, m) = s.pending_surface;
+    x.segment(m, m) = s.held_newest;
+    x.segment(2 * m, m) = s.pending_force;
+    x.segment(3 * m, m) = s.force_newest;
+    if (integrator) x.segment(4 * m, m) = loop.local_model().integrator();
+    return x;
+  }
+};
+
+}  // namespace
+
+LoopParameters LoopParameters::scalar(LocalModelKind kind, HoldKind hold, int ratio, double k0,
+                                      double b0, double kh, double integral) {
+  LoopParameters p;
+  p.local_model = kind;
+  p.hold = hold;
+  p.ratio = ratio;
+  p.stiffness = Eigen::MatrixXd::Constant(1, 1, k0);
+  p.damping = Eigen::MatrixXd::Constant(1, 1, b0);
+  p.gains = {kh, integral};
+  return p;
+}
+
+StabilityResult analyse(const LoopParameters& p) {
+  const int m = static_cast<int>(p.stiffness.rows());
+  LocalModel local(p.local_model, m);
+  local.set_gains(p.gains);
+  if (local.has_predictor())
+    local.set_compliance(p.compliance.size() ? p.compliance
+                                             : Eigen::MatrixXd(p.stiffness.inverse()));
+  MultirateLoop loop(local, LinearEnvironment(p.stiffness, p.damping), p.hold, p.ratio);
+
+  const StatePacking packing{m, has_integrator(p.local_model)};
+  const int n = packing.size();
+  const Eigen::VectorXd still = Eigen::VectorXd::Zero(m);
+  StabilityResult result;
+  result.monodromy.resize(n, n);
+  for (int c = 0; c < n; ++c) {
+    packing.unpack(Eigen::VectorXd::Unit(n, c), loop);
+    loop.state().tick = p.ratio;  // a frame boundary after the first frame
+    for (int i = 0; i < p.ratio; ++i) loop.tick(still);
+    result.monodromy.col(c) = packing.pack(loop);
+  }
+
+  Eigen::EigenSolver<Eigen::MatrixXd> eigen(result.monodromy, /*computeEigenvectors=*/false);
+  for (int i = 0; i < n; ++i) result.poles.push_back(eigen.eigenvalues()[i]);
+  std::sort(result.poles.begin(), result.poles.end(),
+            [](auto a, auto b) { return std::abs(a) > std::abs(b); });
+  result.spectral_radius = result.poles.empty() ? 0 : std::abs(result.poles.front());
+  return result;
+}
+
+std::vector<double> characteristic_polynomial(const LoopParameters& p) {
+  if (p.stiffness.rows() != 1)
+    throw std::invalid_argument("closed forms exist for one contact (scalar K0, B0) only");
+  const double k0 = p.stiffness(0, 0), b0 = p.damping(0, 0), kh = p.gains.proportional;
+  const double ni = p.ratio * p.gains.integral, i = p.gains.integral, n = p.ratio;
+  switch (p.local_model) {
+    case LocalModelKind::p:
+      if (p.hold == HoldKind::zoh) return {k0 + b0, kh - b0};
+      return {k0 + b0, -b0, kh};
+    case LocalModelKind::pi:
+      if (p.hold == HoldKind::zoh) return {k0 + b0, kh - k0 - 2 * b0, b0 - kh + ni};
+      return {k0 + b0, -(k0 + 2 * b0), kh + b0 + i * (n - 1) / 2, i * (n + 1) / 2 - kh};
+    default:
+      throw std::invalid_argument("no closed form for the Smith-predictor local models");
+  }
+}
+
+std::vector<std::complex<double>> polynomial_roots(const std::vector<double>& c) {
+  using C = std::complex<double>;
+  if (c.size() == 2) return {C(-c[1] / c[0], 0)};
+  if (c.size() == 3) {
+    const double a = c[0], b = c[1], d = c[2];
+    const C root = std::sqrt(C(b * b - 4 * a * d, 0));
+    // The form that avoids cancellation: q = -(b + sign(b) sqrt(disc)) / 2, roots q/a and d/q.
+    const C q = -0.5 * (C(b, 0) + (b >= 0 ? root : -root));
+    if (std::abs(q) == 0) return {C(0, 0), C(0, 0)};
+    return {q / a, C(d, 0) / q};
+  }
+  if (c.size() == 4) {
+    Eigen::Matrix3d companion = Eigen::Matrix3d::Zero();
+    companion(0, 0) = -c[1] / c[0];
+    companion(0, 1) = -c[2] / c[0];
+    companion(0, 2) = -c[3] / c[0];
+    companion(1, 0) = 1;
+    companion(2, 1) = 1;
+    Eigen::EigenSolver<Eigen::Matrix3d> eigen(companion, false);
+    return {eigen.eigenvalues()[0], eigen.eigenvalues()[1], eigen.eigenvalues()[2]};
+  }
+  throw std::invalid_argument("polynomial_roots: degrees 1 to 3 only");
+}
+
+bool jury_stable(const std::vector<double>& c) {
+  // Normalise to a positive leading coefficient.
+  std::vector<double> a = c;
+  if (a[0] < 0)
+    for (double& v : a) v = -v;
+  if (a.size() == 2) return std::abs(a[1]) < a[0];
+  if (a.size() == 3) {
+    const double a2 = a[0], a1 = a[1], a0 = a[2];
+    return std::abs(a0) < a2 && a2 + a1 + a0 > 0 && a2 - a1 + a0 > 0;
+  }
+  if (a.size() == 4) {
+    // a3 z^3 + a2 z^2 + a1 z + a0: P(1) > 0, -P(-1) > 0, |a0| < a3, and |b0| > |b2| with
+    // b0 = a0^2 - a3^2, b2 = a0 a2 - a1 a3 (Jury's table, third order).
+    const double a3 = a[0], a2 = a[1], a1 = a[2], a0 = a[3];
+    const double p1 = a3 + a2 + a1 + a0, pm1 = -a3 + a2 - a1 + a0;
+    const double b0 = a0 * a0 - a3 * a3, b2 = a0 * a2 - a1 * a3;
+    return p1 > 0 && -pm1 > 0 && std::abs(a0) < a3 && std::abs(b0) > std::abs(b2);
+  }
+  throw std::invalid_argument("jury_stable: degrees 1 to 3 only");
+}
+
+}  // namespace fetouch::haptics

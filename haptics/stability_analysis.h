@@ -1,0 +1,63 @@
+// Stability of the multirate loop by lifting: the loop is N-periodic at the tick rate, so over one
+// frame it is a time-invariant linear map of its frame-boundary state, X(j+1) = Phi X(j) (the
+// monodromy matrix). The loop is stable iff the spectral radius of Phi is below 1.
+//
+// Phi is built column by column by running the very code of multirate_loop.h for one frame from
+// each unit state with the device held still (x_h = 0); the analysis cannot disagree with the
+// simulation about timing. The frame-boundary state, for m contacts, is
+//   X = [x_o(j-1), x_o(j-2), F((j-1)N), F((j-2)N), s(jN)]      (s only for the PI variants),
+// of which x_o(j-2) and the forces are pure delays for some variants: they add zero poles only.
+//
+// Cross-checks with closed forms (ARCHITECTURE.md section 3), scalar K0, B0:
+//   P,  ZOH:  (K0+B0) z + (Kh - B0)
+//   P,  FOH:  (K0+B0) z^2 - B0 z + Kh
+//   PI, ZOH:  (K0+B0) z^2 + (Kh - K0 - 2B0) z + (B0 - Kh + N I)
+//   PI, FOH:  (K0+B0) z^3 - (K0+2B0) z^2 + (Kh + B0 + I (N-1)/2) z + (I (N+1)/2 - Kh)
+// (the last from s(j+1) = s(j) - I sum_i x_held(jN+i) with the FOH ramp; derivation in
+// docs/stability.md).
+#pragma once
+
+#include <Eigen/Dense>
+
+#include <complex>
+#include <vector>
+
+#include "haptics/hold.h"
+#include "haptics/local_model.h"
+
+namespace fetouch::haptics {
+
+struct LoopParameters {
+  LocalModelKind local_model = LocalModelKind::p;
+  HoldKind hold = HoldKind::zoh;
+  int ratio = 50;                  // N
+  Eigen::MatrixXd stiffness;       // K0, m x m
+  Eigen::MatrixXd damping;         // B0, m x m
+  LocalModelGains gains;           // Kh, I
+  Eigen::MatrixXd compliance;      // W for the Smith variants; empty: K0^-1
+
+  static LoopParameters scalar(LocalModelKind kind, HoldKind hold, int ratio, double k0, double b0,
+                               double kh, double integral = 0);
+};
+
+struct StabilityResult {
+  Eigen::MatrixXd monodromy;
+  std::vector<std::complex<double>> poles;  // eigenvalues of the monodromy, largest first
+  double spectral_radius = 0;
+  bool stable() const { return spectral_radius < 1.0; }
+};
+
+StabilityResult analyse(const LoopParameters& parameters);
+
+// The closed-form characteristic polynomial (coefficients, highest power first) for scalar K0, B0
+// and the P/PI local models with either hold; throws for the Smith variants or matrix parameters.
+std::vector<double> characteristic_polynomial(const LoopParameters& parameters);
+
+// Roots of a polynomial (highest power first) of degree 1 to 3: closed forms for degrees 1 and 2,
+// the companion matrix for 3.
+std::vector<std::complex<double>> polynomial_roots(const std::vector<double>& coefficients);
+
+// Jury's test: all roots strictly inside the unit circle. Degrees 1 to 3.
+bool jury_stable(const std::vector<double>& coefficients);
+
+}  // namespace fetouch::haptics

@@ -1,0 +1,204 @@
+// The lifted (monodromy) analysis against independent answers: closed-form poles, Jury's test,
+// and brute-force lockstep simulation of the loop.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <random>
+
+#include "haptics/multirate_loop.h"
+#include "haptics/stability_analysis.h"
+
+namespace fetouch::haptics {
+namespace {
+
+using C = std::complex<double>;
+
+double max_modulus(const std::vector<C>& roots) {
+  double r = 0;
+  for (const auto& z : roots) r = std::max(r, std::abs(z));
+  return r;
+}
+
+TEST(ClosedForms, PZohPoleAndRange) {
+  const double k0 = 1.0, b0 = 0.3;
+  for (double kh : {-0.9, 0.2, 1.0, 1.5, 1.59}) {
+    const auto r = analyse(LoopParameters::scalar(LocalModelKind::p, HoldKind::zoh, 50, k0, b0, kh));
+    EXPECT_NEAR(r.spectral_radius, std::abs((b0 - kh) / (k0 + b0)), 1e-12) << kh;
+    EXPECT_EQ(r.stable(), -k0 < kh && kh < k0 + 2 * b0) << kh;
+  }
+  EXPECT_FALSE(analyse(LoopParameters::scalar(LocalModelKind::p, HoldKind::zoh, 50, k0, b0, 1.61)).stable());
+  EXPECT_FALSE(analyse(LoopParameters::scalar(LocalModelKind::p, HoldKind::zoh, 50, k0, b0, -1.01)).stable());
+}
+
+TEST(ClosedForms, PFohPolesOnTheImaginaryAxisWithoutDamping) {
+  const double k0 = 2.0, kh = 0.5;
+  const auto r = analyse(LoopParameters::scalar(LocalModelKind::p, HoldKind::foh, 50, k0, 0, kh));
+  // Poles at +-j sqrt(Kh/K0) = +-0.5j; the other eigenvalues are delays at 0.
+  int found = 0;
+  for (const auto& z : r.poles)
+    if (std::abs(z - C(0, std::sqrt(kh / k0))) < 1e-9 || std::abs(z - C(0, -std::sqrt(kh / k0))) < 1e-9)
+      ++found;
+  EXPECT_EQ(found, 2);
+  EXPECT_NEAR(r.spectral_radius, 0.5, 1e-9);
+}
+
+TEST(ClosedForms, PiZohDeadbeat) {
+  // Kh = K0 and N I = K0 with B0 = 0: characteristic polynomial K0 z^2, both poles at 0.
+  const auto r = analyse(LoopParameters::scalar(LocalModelKind::pi, HoldKind::zoh, 50, 1.0, 0, 1.0, 1.0 / 50));
+  // Zero is a defective eigenvalue (a Jordan block of size k with the delay states), which numerical
+  // eigenvalues resolve only to about eps^(1/k) ~ 1e-5; the exact statement is nilpotency:
+  // Phi^n = 0 for the n x n monodromy, to round-off.
+  EXPECT_LT(r.spectral_radius, 1e-4);
+  Eigen::MatrixXd power = Eigen::MatrixXd::Identity(r.monodromy.rows(), r.monodromy.cols());
+  for (int i = 0; i < r.monodromy.rows(); ++i) power = power * r.monodromy;
+  EXPECT_LT(power.norm(), 1e-12);
+}
+
+TEST(ClosedForms, PiZohJuryInequalitiesOfTheArchitecturePage) {
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<double> u(0, 2);
+  const int n = 50;
+  for (int t = 0; t < 3000; ++t) {
+    const double k0 = u(rng) + 0.05, b0 = 0.5 * u(rng), kh = 1.5 * u(rng) - 0.5, ni = 1.5 * u(rng) - 0.3;
+    const bool jury = ni > 0 && ni < k0 + kh && ni > kh - k0 - 2 * b0 && 2 * kh < 2 * k0 + 4 * b0 + ni;
+    const auto r = analyse(LoopParameters::scalar(LocalModelKind::pi, HoldKind::zoh, n, k0, b0, kh, ni / n));
+    if (std::abs(r.spectral_radius - 1) < 1e-9) continue;  // on the boundary either answer is fair
+    EXPECT_EQ(r.stable(), jury) << "K0 " << k0 << " B0 " << b0 << " Kh " << kh << " NI " << ni;
+  }
+}
+
+// 10,000 random parameter sets per local-model/hold pair: the monodromy's spectral radius equals the
+// largest root modulus of the closed-form polynomial, and Jury's verdict agrees.
+class AgainstClosedForm : public ::testing::TestWithParam<std::pair<LocalModelKind, HoldKind>> {};
+
+TEST_P(AgainstClosedForm, SpectralRadiusMatchesPolynomialRoots) {
+  const auto [kind, hold] = GetParam();
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> u(0, 1);
+  int compared = 0;
+  for (int t = 0; t < 10000; ++t) {
+    const int n = 1 + static_cast<int>(u(rng) * 100);
+    const double k0 = 0.05 + 2 * u(rng), b0 = u(rng), kh = 2.5 * u(rng) - 0.5;
+    const double integral = kind == LocalModelKind::pi ? (1.5 * u(rng) - 0.2) / n : 0;
+    const auto p = LoopParameters::scalar(kind, hold, n, k0, b0, kh, integral);
+    const auto coefficients = characteristic_polynomial(p);
+    const auto roots = polynomial_roots(coefficients);
+    const double closed = max_modulus(roots);
+    // Near a repeated root both eigenvalues and roots lose accuracy (to ~sqrt(eps)); compare only
+    // where the roots are distinct enough for 1e-9 to be meaningful.
+    bool separated = true;
+    for (size_t a = 0; a < roots.size(); ++a)
+      for (size_t b = a + 1; b < roots.size(); ++b)
+        separated = separated && std::abs(roots[a] - roots[b]) > 1e-3;
+    if (!separated) continue;
+    ++compared;
+    const auto r = analyse(p);
+    ASSERT_NEAR(r.spectral_radius, closed, 1e-9 * std::max(1.0, closed))
+        << "N " << n << " K0 " << k0 << " B0 " << b0 << " Kh " << kh << " I " << integral;
+    if (std::abs(closed - 1) > 1e-6) {
+      ASSERT_EQ(r.stable(), jury_stable(coefficients));
+    }
+  }
+  EXPECT_GT(compared, 9500);
+}
+
+INSTANTIATE_TEST_SUITE_P(Pairs, AgainstClosedForm,
+                         ::testing::Values(std::make_pair(LocalModelKind::p, HoldKind::zoh),
+                                           std::make_pair(LocalModelKind::p, HoldKind::foh),
+                                           std::make_pair(LocalModelKind::pi, HoldKind::zoh),
+                                           std::make_pair(LocalModelKind::pi, HoldKind::foh)));
+
+// Growth or decay of a long lockstep run from a disturbed state, with the device held still.
+double simulated_growth(const LoopParameters& p, int frames) {
+  const int m = static_cast<int>(p.stiffness.rows());
+  LocalModel local(p.local_model, m);
+  local.set_gains(p.gains);
+  if (local.has_predictor()) local.set_compliance(p.stiffness.inverse());
+  MultirateLoop loop(local, LinearEnvironment(p.stiffness, p.damping), p.hold, p.ratio);
+  const Eigen::VectorXd still = Eigen::VectorXd::Zero(m);
+  // Disturb: the device presses for one frame, then holds still at 0.
+  for (int k = 0; k < p.ratio; ++k) loop.tick(Eigen::VectorXd::Ones(m));
+  double early = 0, late = 0;
+  for (int j = 0; j < frames; ++j)
+    for (int k = 0; k < p.ratio; ++k) {
+      const double f = loop.tick(still).norm();
+      if (j >= 5 && j < 10) early = std::max(early, f);
+      if (j >= frames - 5) late = std::max(late, f);
+    }
+  return late / std::max(early, 1e-300);
+}
+
+TEST_P(AgainstClosedForm, VerdictConfirmedBySimulationAwayFromTheBoundary) {
+  const auto [kind, hold] = GetParam();
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> u(0, 1);
+  int checked = 0;
+  for (int t = 0; checked < 2000 && t < 20000; ++t) {
+    const int n = 1 + static_cast<int>(u(rng) * 60);
+    const double k0 = 0.05 + 2 * u(rng), b0 = u(rng), kh = 2.5 * u(rng) - 0.5;
+    const double integral = kind == LocalModelKind::pi ? (1.5 * u(rng) - 0.2) / n : 0;
+    const auto p = LoopParameters::scalar(kind, hold, n, k0, b0, kh, integral);
+    const double rho = analyse(p).spectral_radius;
+    if (std::abs(rho - 1) < 0.05) continue;
+    ++checked;
+    // 120 frames: rho^110 is below 4e-3 when stable and above 200 when unstable.
+    const double growth = simulated_growth(p, 120);
+    ASSERT_EQ(rho < 1, growth < 1) << "rho " << rho << " growth " << growth;
+  }
+  EXPECT_EQ(checked, 2000);
+}
+
+// Steady states and the seed's numeric examples, with a step of the device into the surface.
+struct StepResponse {
+  double force, surface;
+};
+StepResponse final_values(const LoopParameters& p, int frames) {
+  LocalModel local(p.local_model, 1);
+  local.set_gains(p.gains);
+  MultirateLoop loop(local, LinearEnvironment(p.stiffness, p.damping), p.hold, p.ratio);
+  const Eigen::VectorXd step = Eigen::VectorXd::Ones(1);
+  double force = 0;
+  for (int k = 0; k < frames * p.ratio; ++k) force = loop.tick(step)(0);
+  return {force, loop.surface()(0)};
+}
+
+TEST(SteadyState, ProportionalIsSofterThanTheTissue) {
+  const auto r = final_values(LoopParameters::scalar(LocalModelKind::p, HoldKind::zoh, 50, 0.9, 0, 0.1), 200);
+  EXPECT_NEAR(r.force, 0.9 * 0.1 / (0.9 + 0.1), 1e-12);
+  EXPECT_NEAR(r.surface, 0.1, 1e-12);  // one tenth of the device step
+}
+
+TEST(SteadyState, IntegralRendersTheTissueStiffness) {
+  const auto r = final_values(LoopParameters::scalar(LocalModelKind::pi, HoldKind::zoh, 50, 0.9, 0.1, 0.5, 0.3 / 50), 400);
+  EXPECT_NEAR(r.force, 0.9, 1e-9);   // K0 x_h
+  EXPECT_NEAR(r.surface, 1.0, 1e-9); // no proxy offset
+}
+
+TEST(SteadyState, RingingAndDivergenceOfTheSeedExample) {
+  const auto ring = analyse(LoopParameters::scalar(LocalModelKind::p, HoldKind::zoh, 50, 0.2, 0, 0.19));
+  EXPECT_NEAR(ring.poles.front().real(), -0.95, 1e-12);
+  EXPECT_TRUE(ring.stable());
+  EXPECT_FALSE(analyse(LoopParameters::scalar(LocalModelKind::p, HoldKind::zoh, 50, 0.2, 0, 0.21)).stable());
+  // It rings for seconds: 0.95^j falls below 2 % only after 77 frames (3.8 s at 20 Hz).
+  EXPECT_GT(std::log(0.02) / std::log(0.95) * 0.05, 3.0);
+}
+
+TEST(CoupledContacts, EachAloneStableThePairNot) {
+  LoopParameters pair;
+  pair.local_model = LocalModelKind::p;
+  pair.hold = HoldKind::zoh;
+  pair.ratio = 50;
+  pair.stiffness.resize(2, 2);
+  pair.stiffness << 1, -0.8, -0.8, 1;
+  pair.damping = Eigen::MatrixXd::Zero(2, 2);
+  pair.gains = {0.3, 0};
+  EXPECT_TRUE(analyse(LoopParameters::scalar(LocalModelKind::p, HoldKind::zoh, 50, 1.0, 0, 0.3)).stable());
+  const auto r = analyse(pair);
+  EXPECT_FALSE(r.stable());
+  // The soft mode (eigenvalue 0.2 of K0) has pole -Kh/0.2 = -1.5.
+  EXPECT_NEAR(r.spectral_radius, 1.5, 1e-9);
+  EXPECT_GT(simulated_growth(pair, 40), 1e3);
+}
+
+}  // namespace
+}  // namespace fetouch::haptics
