@@ -9,5 +9,6 @@ class App;
 namespace fetouch::app {
 
 void add_check_command(CLI::App& parent, int& exit_code);
+void add_stability_command(CLI::App& parent, int& exit_code);
 
 }  // namespace fetouch::app
