@@ -11,14 +11,14 @@ LinearEnvironment::LinearEnvironment(const Eigen::MatrixXd& stiffness, const Eig
     throw std::invalid_argument("LinearEnvironment: K0 and B0 must be square and of one size");
   k_plus_b_.compute(stiffness_ + damping_);
   surface_ = Eigen::VectorXd::Zero(stiffness.rows());
-}
-
-LinearEnvironment LinearEnvironment::scalar(double k0, double b0) {
-  return LinearEnvironment(Eigen::MatrixXd::Constant(1, 1, k0), Eigen::MatrixXd::Constant(1, 1, b0));
+  rhs_ = Eigen::VectorXd::Zero(stiffness.rows());
 }
 
 const Eigen::VectorXd& LinearEnvironment::step(const Eigen::VectorXd& force) {
-  surface_ = k_plus_b_.solve(force + damping_ * surface_);
+  // Into preallocated vectors: in lockstep this runs inside the tick that decimates.
+  rhs_.noalias() = damping_ * surface_;
+  rhs_ += force;
+  surface_ = k_plus_b_.solve(rhs_);
   return surface_;
 }
 

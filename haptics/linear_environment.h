@@ -18,7 +18,6 @@ namespace fetouch::haptics {
 class LinearEnvironment {
  public:
   LinearEnvironment(const Eigen::MatrixXd& stiffness, const Eigen::MatrixXd& damping);
-  static LinearEnvironment scalar(double k0, double b0);
 
   // One frame: takes F(j), returns x_o(j) and remembers it.
   const Eigen::VectorXd& step(const Eigen::VectorXd& force);
@@ -35,7 +34,7 @@ class LinearEnvironment {
  private:
   Eigen::MatrixXd stiffness_, damping_;
   Eigen::LDLT<Eigen::MatrixXd> k_plus_b_;
-  Eigen::VectorXd surface_;
+  Eigen::VectorXd surface_, rhs_;
 };
 
 }  // namespace fetouch::haptics

@@ -25,6 +25,13 @@ namespace fetouch::haptics {
 
 enum class LocalModelKind { p, pi, smith, pi_smith };
 
+constexpr bool has_integrator(LocalModelKind kind) {
+  return kind == LocalModelKind::pi || kind == LocalModelKind::pi_smith;
+}
+constexpr bool has_predictor(LocalModelKind kind) {
+  return kind == LocalModelKind::smith || kind == LocalModelKind::pi_smith;
+}
+
 struct LocalModelGains {
   double proportional = 0;  // Kh
   double integral = 0;      // I, per tick
@@ -35,8 +42,8 @@ class LocalModel {
   LocalModel(LocalModelKind kind, int contacts);
 
   LocalModelKind kind() const { return kind_; }
-  bool has_integrator() const { return kind_ == LocalModelKind::pi || kind_ == LocalModelKind::pi_smith; }
-  bool has_predictor() const { return kind_ == LocalModelKind::smith || kind_ == LocalModelKind::pi_smith; }
+  bool has_integrator() const { return haptics::has_integrator(kind_); }
+  bool has_predictor() const { return haptics::has_predictor(kind_); }
 
   void set_gains(const LocalModelGains& gains);
   void set_compliance(const Eigen::MatrixXd& compliance);  // W, for the Smith variants

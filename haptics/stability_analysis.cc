@@ -7,15 +7,10 @@
 #include <stdexcept>
 
 #include "haptics/linear_environment.h"
-#include "haptics/multirate_loop.h"
 
 namespace fetouch::haptics {
 
 namespace {
-
-bool has_integrator(LocalModelKind kind) {
-  return kind == LocalModelKind::pi || kind == LocalModelKind::pi_smith;
-}
 
 // Packing of the frame-boundary state (see the header) into one vector and back. The loop is
 // positioned at a frame boundary j >= 1, just before the promotion of the pending answer.
@@ -63,14 +58,18 @@ LoopParameters LoopParameters::scalar(LocalModelKind kind, HoldKind hold, int ra
   return p;
 }
 
-StabilityResult analyse(const LoopParameters& p) {
-  const int m = static_cast<int>(p.stiffness.rows());
-  LocalModel local(p.local_model, m);
+MultirateLoop make_loop(const LoopParameters& p) {
+  LinearEnvironment environment(p.stiffness, p.damping);
+  LocalModel local(p.local_model, environment.contacts());
   local.set_gains(p.gains);
   if (local.has_predictor())
-    local.set_compliance(p.compliance.size() ? p.compliance
-                                             : Eigen::MatrixXd(p.stiffness.inverse()));
-  MultirateLoop loop(local, LinearEnvironment(p.stiffness, p.damping), p.hold, p.ratio);
+    local.set_compliance(p.compliance.size() ? p.compliance : environment.compliance());
+  return MultirateLoop(std::move(local), std::move(environment), p.hold, p.ratio);
+}
+
+StabilityResult analyse(const LoopParameters& p) {
+  const int m = static_cast<int>(p.stiffness.rows());
+  MultirateLoop loop = make_loop(p);
 
   const StatePacking packing{m, has_integrator(p.local_model)};
   const int n = packing.size();

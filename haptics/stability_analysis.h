@@ -24,6 +24,7 @@
 
 #include "haptics/hold.h"
 #include "haptics/local_model.h"
+#include "haptics/multirate_loop.h"
 
 namespace fetouch::haptics {
 
@@ -46,6 +47,9 @@ struct StabilityResult {
   double spectral_radius = 0;
   bool stable() const { return spectral_radius < 1.0; }
 };
+
+// The lockstep loop these parameters describe, at rest; W defaults to the environment's K0^-1.
+MultirateLoop make_loop(const LoopParameters& parameters);
 
 StabilityResult analyse(const LoopParameters& parameters);
 

@@ -3,8 +3,6 @@
 #include <cmath>
 #include <stdexcept>
 
-#include "haptics/linear_environment.h"
-#include "haptics/multirate_loop.h"
 
 namespace fetouch::haptics {
 
@@ -26,23 +24,17 @@ double settling_time(const std::vector<double>& y, double final_value, double pe
 StepResponse simulate_step(const LoopParameters& p, double period_s, double duration_s) {
   if (p.stiffness.rows() != 1) throw std::invalid_argument("simulate_step: one contact only");
   const double k0 = p.stiffness(0, 0), kh = p.gains.proportional;
-  LocalModel local(p.local_model, 1);
-  local.set_gains(p.gains);
-  if (local.has_predictor())
-    local.set_compliance(p.compliance.size() ? p.compliance : Eigen::MatrixXd(p.stiffness.inverse()));
-  MultirateLoop loop(local, LinearEnvironment(p.stiffness, p.damping), p.hold, p.ratio);
+  MultirateLoop loop = make_loop(p);
 
   StepResponse r;
   r.period_s = period_s;
-  const bool integral = local.has_integrator();
+  const bool integral = has_integrator(p.local_model);
   r.steady_force = integral ? k0 : k0 * kh / (k0 + kh);
   r.steady_surface = integral ? 1.0 : kh / (k0 + kh);
   const long ticks = static_cast<long>(std::ceil(duration_s / period_s));
   const Eigen::VectorXd device = Eigen::VectorXd::Ones(1);
   for (long k = 0; k < ticks; ++k) {
     const double f = loop.tick(device)(0);
-    r.time_s.push_back(static_cast<double>(k) * period_s);
-    r.device.push_back(1.0);
     r.force.push_back(f);
     r.surface.push_back(loop.surface()(0));
     r.proxy.push_back(loop.held_surface()(0));  // the surface the local model rendered this tick

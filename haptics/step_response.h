@@ -10,9 +10,9 @@ namespace fetouch::haptics {
 
 struct StepResponse {
   double period_s = 1e-3;
-  // Per tick: device x_h, proxy (the held surface the local model rendered against), surface x_o
-  // (the environment's newest answer) and force F.
-  std::vector<double> time_s, device, proxy, surface, force;
+  // Per tick k (time k T, device x_h = 1): proxy (the held surface the local model rendered
+  // against), surface x_o (the environment's newest answer) and force F.
+  std::vector<double> proxy, surface, force;
   double steady_force = 0;    // closed form: K0 Kh/(K0 + Kh) for P and Smith, K0 for PI variants
   double steady_surface = 0;  // Kh/(K0 + Kh), or 1
   double force_settling_s = -1;    // 2 % settling time; -1 if it does not settle in the run

@@ -43,7 +43,7 @@ int run_stability(const StabilityOptions& o) {
                               : o.local_model == "smith" ? LocalModelKind::smith
                                                          : LocalModelKind::pi_smith;
   const HoldKind hold = o.hold == "zoh" ? HoldKind::zoh : HoldKind::foh;
-  const bool integral = kind == LocalModelKind::pi || kind == LocalModelKind::pi_smith;
+  const bool integral = has_integrator(kind);
   if (!integral && o.ni != 0) {
     std::cerr << "error: --ni is the integral gain N*I; local model " << o.local_model
               << " has none (use pi or pi_smith)\n";

@@ -111,10 +111,7 @@ INSTANTIATE_TEST_SUITE_P(Pairs, AgainstClosedForm,
 // Growth or decay of a long lockstep run from a disturbed state, with the device held still.
 double simulated_growth(const LoopParameters& p, int frames) {
   const int m = static_cast<int>(p.stiffness.rows());
-  LocalModel local(p.local_model, m);
-  local.set_gains(p.gains);
-  if (local.has_predictor()) local.set_compliance(p.stiffness.inverse());
-  MultirateLoop loop(local, LinearEnvironment(p.stiffness, p.damping), p.hold, p.ratio);
+  MultirateLoop loop = make_loop(p);
   const Eigen::VectorXd still = Eigen::VectorXd::Zero(m);
   // Disturb: the device presses for one frame, then holds still at 0.
   for (int k = 0; k < p.ratio; ++k) loop.tick(Eigen::VectorXd::Ones(m));
@@ -153,9 +150,7 @@ struct StepResponse {
   double force, surface;
 };
 StepResponse final_values(const LoopParameters& p, int frames) {
-  LocalModel local(p.local_model, 1);
-  local.set_gains(p.gains);
-  MultirateLoop loop(local, LinearEnvironment(p.stiffness, p.damping), p.hold, p.ratio);
+  MultirateLoop loop = make_loop(p);
   const Eigen::VectorXd step = Eigen::VectorXd::Ones(1);
   double force = 0;
   for (int k = 0; k < frames * p.ratio; ++k) force = loop.tick(step)(0);
