@@ -3,16 +3,23 @@
 // form cross-check where one exists, steady-state force and proxy offset, 2 % settling times.
 #include <CLI/CLI.hpp>
 
+#include <algorithm>
 #include <cmath>
+#include <filesystem>
+#include <fstream>
 #include <iomanip>
 #include <iostream>
 #include <memory>
 #include <sstream>
 
+#include "app/chart_png.h"
 #include "app/commands/commands.h"
 #include "app/exit_codes.h"
 #include "app/json_writer.h"
+#include "app/log.h"
+#include "app/progress.h"
 #include "haptics/stability_analysis.h"
+#include "haptics/stability_region.h"
 #include "haptics/step_response.h"
 
 namespace fetouch::app {
@@ -27,7 +34,228 @@ struct StabilityOptions {
   double rate_hz = 1000;
   double duration_s = 10;
   bool json = false;
+  std::string region, volume, step;      // output paths (stem; .csv and .png are written)
+  std::vector<double> kh_range, ni_range, k0_values{0.5, 1.0, 2.0};
+  int points = 101;
 };
+
+namespace fs = std::filesystem;
+
+// "out/region", "out/region.csv" and "out/region.png" all name the pair out/region.{csv,png}.
+fs::path stem_of(const std::string& path) {
+  fs::path p(path);
+  if (p.extension() == ".csv" || p.extension() == ".png") p.replace_extension();
+  return p;
+}
+
+std::ofstream open_csv(const fs::path& path) {
+  if (path.has_parent_path()) fs::create_directories(path.parent_path());
+  std::ofstream out(path);
+  if (!out) throw std::runtime_error("cannot write " + path.string());
+  out << std::setprecision(10);
+  return out;
+}
+
+// Draws the chart unless there is no display; says what happened either way.
+void draw(const Chart& chart, const fs::path& png) {
+  if (!display_available()) {
+    log::warning() << no_display_hint(png);
+    return;
+  }
+  write_chart_png(chart, png);
+  log::info() << "wrote " << png.string();
+}
+
+// The default axes: a coarse 41 x 41 scan of [0, 3 (K0 + B0)]^2 finds the stable set, and the
+// axes cover it with two coarse cells to spare (the whole scan if nothing is stable).
+haptics::RegionGrid fit_grid(const haptics::LoopParameters& base) {
+  haptics::RegionGrid coarse;
+  const double top = 3 * (base.stiffness(0, 0) + base.damping(0, 0));
+  coarse.kh_max = coarse.ni_max = top;
+  coarse.kh_points = coarse.ni_points = 41;
+  const auto region = haptics::stability_region(base, coarse);
+  double kh_low = top, kh_high = 0, ni_low = top, ni_high = 0;
+  for (size_t a = 0; a < region.kh.size(); ++a)
+    for (size_t b = 0; b < region.ni.size(); ++b)
+      if (region.at(a, b) < 1) {
+        kh_low = std::min(kh_low, region.kh[a]), kh_high = std::max(kh_high, region.kh[a]);
+        ni_low = std::min(ni_low, region.ni[b]), ni_high = std::max(ni_high, region.ni[b]);
+      }
+  if (kh_high < kh_low) return coarse;
+  const double cell = top / 40;
+  haptics::RegionGrid fitted = coarse;
+  fitted.kh_min = std::max(0.0, kh_low - 2 * cell);
+  fitted.kh_max = std::min(top, kh_high + 2 * cell);
+  fitted.ni_min = std::max(0.0, ni_low - 2 * cell);
+  fitted.ni_max = std::min(top, ni_high + 2 * cell);
+  return fitted;
+}
+
+void progress_callback(double fraction, void* context) {
+  static_cast<Progress*>(context)->update(static_cast<long>(fraction * 1000));
+}
+
+haptics::StabilityRegion compute_region(const haptics::LoopParameters& base, const haptics::RegionGrid& grid,
+                                        const std::string& label) {
+  // Progress only where it is worth watching (a second or more).
+  if (static_cast<long>(grid.kh_points) * grid.ni_points < 40000) return haptics::stability_region(base, grid);
+  Progress progress(label, 1000, std::cerr, Progress::stderr_is_terminal());
+  auto region = haptics::stability_region(base, grid, progress_callback, &progress);
+  progress.finish();
+  return region;
+}
+
+// The closed-form verdict (Jury on the characteristic polynomial) for P and PI, else -1.
+int jury_verdict(haptics::LoopParameters p, double kh, double ni) {
+  if (haptics::has_predictor(p.local_model)) return -1;
+  p.gains = {kh, ni / p.ratio};
+  return haptics::jury_stable(haptics::characteristic_polynomial(p)) ? 1 : 0;
+}
+
+// The outline of the stable set of a region: for each Kh with stable points, the lowest and the
+// highest stable N*I, walked as one closed line (lower edge left to right, upper edge back).
+ChartSeries outline(const haptics::StabilityRegion& r, const std::string& name, std::array<unsigned char, 3> color) {
+  ChartSeries s{name, {}, {}, color, false, 2.5f};
+  std::vector<std::pair<double, double>> upper;
+  for (size_t a = 0; a < r.kh.size(); ++a) {
+    int low = -1, high = -1;
+    for (size_t b = 0; b < r.ni.size(); ++b)
+      if (r.at(a, b) < 1) {
+        if (low < 0) low = static_cast<int>(b);
+        high = static_cast<int>(b);
+      }
+    if (low < 0) continue;
+    s.x.push_back(r.kh[a]);
+    s.y.push_back(r.ni[low]);
+    upper.emplace_back(r.kh[a], r.ni[high]);
+  }
+  for (auto it = upper.rbegin(); it != upper.rend(); ++it) s.x.push_back(it->first), s.y.push_back(it->second);
+  if (!s.x.empty()) s.x.push_back(s.x.front()), s.y.push_back(s.y.front());
+  return s;
+}
+
+std::string number(double v) {
+  std::ostringstream out;
+  out << v;
+  return out.str();
+}
+
+std::string describe(const haptics::LoopParameters& p, const StabilityOptions& o) {
+  std::ostringstream out;
+  out << o.local_model << ", " << o.hold << ", N = " << p.ratio;
+  return out.str();
+}
+
+void write_region(const StabilityOptions& o, const haptics::LoopParameters& base, const haptics::RegionGrid& grid) {
+  const fs::path stem = stem_of(o.region);
+  const auto region = compute_region(base, grid, "region");
+  const bool integral = haptics::has_integrator(base.local_model);
+  long agree = 0, compared = 0;
+  {
+    std::ofstream csv = open_csv(fs::path(stem).concat(".csv"));
+    csv << "kh,ni,spectral_radius,stable,closed_form_stable\n";
+    for (size_t a = 0; a < region.kh.size(); ++a)
+      for (size_t b = 0; b < region.ni.size(); ++b) {
+        const double r = region.at(a, b);
+        const int jury = jury_verdict(base, region.kh[a], region.ni[b]);
+        csv << region.kh[a] << ',' << region.ni[b] << ',' << r << ',' << (r < 1) << ',' << jury << '\n';
+        if (jury >= 0 && std::abs(r - 1) > 1e-9) ++compared, agree += (jury == 1) == (r < 1);
+      }
+    if (!csv) throw std::runtime_error("cannot write " + stem.string() + ".csv");
+  }
+  std::cout << "region: " << region.stable_points() << " of " << region.radius.size()
+            << " grid points stable; written to " << stem.string() << ".csv\n";
+  if (compared) std::cout << "  closed form (Jury) agrees at " << agree << " of " << compared << " points\n";
+
+  Chart chart;
+  chart.title = "Stability region: " + describe(base, o) + ", K0 = " + number(o.k0) + ", B0 = " + number(o.b0);
+  chart.x_label = "Kh";
+  if (integral) {
+    chart.y_label = "N*I";
+    ChartSeries fast{"radius < 0.5", {}, {}, {0, 110, 50}, true, 6}, slow{"0.5 <= radius < 0.9", {}, {}, {90, 190, 90}, true, 6},
+        edge{"0.9 <= radius < 1", {}, {}, {230, 190, 40}, true, 6};
+    for (size_t a = 0; a < region.kh.size(); ++a)
+      for (size_t b = 0; b < region.ni.size(); ++b) {
+        const double r = region.at(a, b);
+        ChartSeries* target = r < 0.5 ? &fast : r < 0.9 ? &slow : r < 1 ? &edge : nullptr;
+        if (target) target->x.push_back(region.kh[a]), target->y.push_back(region.ni[b]);
+      }
+    chart.series = {fast, slow, edge};
+    if (!haptics::has_predictor(base.local_model)) {
+      // Jury's boundary, found independently on a finer N*I scan for each Kh.
+      ChartSeries jury{"closed-form boundary (Jury)", {}, {}, {0, 0, 0}, true, 5};
+      const int fine = 4 * static_cast<int>(region.ni.size());
+      for (double kh : region.kh) {
+        int previous = -1;
+        for (int b = 0; b <= fine; ++b) {
+          const double ni = grid.ni_min + (grid.ni_max - grid.ni_min) * b / fine;
+          const int verdict = jury_verdict(base, kh, ni);
+          if (previous >= 0 && verdict != previous) jury.x.push_back(kh), jury.y.push_back(ni);
+          previous = verdict;
+        }
+      }
+      chart.series.push_back(jury);
+    }
+  } else {
+    chart.y_label = "spectral radius";
+    ChartSeries radius{"spectral radius", region.kh, region.radius, {0, 90, 170}, false, 2.5f};
+    ChartSeries one{"stability limit", {region.kh.front(), region.kh.back()}, {1, 1}, {200, 0, 0}, false, 1.5f};
+    chart.series = {radius, one};
+  }
+  draw(chart, fs::path(stem).concat(".png"));
+}
+
+void write_volume(const StabilityOptions& o, const haptics::LoopParameters& base, const haptics::RegionGrid& grid) {
+  if (!haptics::has_integrator(base.local_model))
+    throw std::invalid_argument("--volume needs an integral axis: use --local-model pi or pi_smith");
+  const fs::path stem = stem_of(o.volume);
+  std::ofstream csv = open_csv(fs::path(stem).concat(".csv"));
+  csv << "k0,kh,ni,spectral_radius,stable\n";
+  Chart chart;
+  chart.title = "Stability volume: " + describe(base, o) + ", B0 = " + number(o.b0) + " (outlines per K0)";
+  chart.x_label = "Kh";
+  chart.y_label = "N*I";
+  const std::array<std::array<unsigned char, 3>, 6> colors{{{0, 90, 170}, {200, 60, 0}, {0, 140, 60}, {140, 0, 140}, {120, 120, 0}, {0, 0, 0}}};
+  for (size_t v = 0; v < o.k0_values.size(); ++v) {
+    haptics::LoopParameters p = base;
+    p.stiffness(0, 0) = o.k0_values[v];
+    std::ostringstream label;
+    label << "K0 = " << o.k0_values[v];
+    const auto region = compute_region(p, grid, label.str());
+    for (size_t a = 0; a < region.kh.size(); ++a)
+      for (size_t b = 0; b < region.ni.size(); ++b)
+        csv << region.k0 << ',' << region.kh[a] << ',' << region.ni[b] << ',' << region.at(a, b) << ','
+            << (region.at(a, b) < 1) << '\n';
+    std::cout << label.str() << ": " << region.stable_points() << " of " << region.radius.size() << " grid points stable\n";
+    chart.series.push_back(outline(region, label.str(), colors[v % colors.size()]));
+  }
+  if (!csv) throw std::runtime_error("cannot write " + stem.string() + ".csv");
+  std::cout << "volume written to " << stem.string() << ".csv\n";
+  draw(chart, fs::path(stem).concat(".png"));
+}
+
+void write_step(const StabilityOptions& o, const haptics::StepResponse& step) {
+  const fs::path stem = stem_of(o.step);
+  {
+    std::ofstream csv = open_csv(fs::path(stem).concat(".csv"));
+    csv << "t_s,device,proxy,surface,force\n";
+    for (size_t k = 0; k < step.force.size(); ++k)
+      csv << k * step.period_s << ",1," << step.proxy[k] << ',' << step.surface[k] << ',' << step.force[k] << '\n';
+    if (!csv) throw std::runtime_error("cannot write " + stem.string() + ".csv");
+  }
+  std::cout << "step response written to " << stem.string() << ".csv\n";
+  Chart chart;
+  chart.title = "Step response: " + o.local_model + ", " + o.hold + ", K0 = " + number(o.k0) + ", Kh = " + number(o.kh);
+  chart.x_label = "time (s)";
+  chart.y_label = "position (device step = 1) and force";
+  std::vector<double> t(step.force.size());
+  for (size_t k = 0; k < t.size(); ++k) t[k] = k * step.period_s;
+  chart.series = {{"device", t, std::vector<double>(t.size(), 1.0), {120, 120, 120}, false, 1.5f},
+                  {"proxy (held surface)", t, step.proxy, {0, 140, 60}, false, 2.0f},
+                  {"surface", t, step.surface, {0, 90, 170}, false, 2.0f},
+                  {"force", t, step.force, {200, 40, 0}, false, 2.0f}};
+  draw(chart, fs::path(stem).concat(".png"));
+}
 
 std::string complex_text(std::complex<double> z) {
   std::ostringstream out;
@@ -50,6 +278,30 @@ int run_stability(const StabilityOptions& o) {
     return kExitBadInput;
   }
   const auto p = LoopParameters::scalar(kind, hold, o.ratio, o.k0, o.b0, o.kh, o.ni / o.ratio);
+  if (!o.region.empty() || !o.volume.empty()) {
+    double k0_max = o.k0;
+    if (!o.volume.empty()) k0_max = *std::max_element(o.k0_values.begin(), o.k0_values.end());
+    auto base = p;
+    base.stiffness(0, 0) = k0_max;
+    const RegionGrid fitted = fit_grid(base);
+    RegionGrid grid;
+    grid.kh_min = o.kh_range.empty() ? fitted.kh_min : o.kh_range[0];
+    grid.kh_max = o.kh_range.empty() ? fitted.kh_max : o.kh_range[1];
+    grid.ni_min = o.ni_range.empty() ? fitted.ni_min : o.ni_range[0];
+    grid.ni_max = o.ni_range.empty() ? fitted.ni_max : o.ni_range[1];
+    grid.kh_points = grid.ni_points = o.points;
+    try {
+      if (!o.region.empty()) write_region(o, p, grid);
+      if (!o.volume.empty()) write_volume(o, p, grid);
+    } catch (const std::invalid_argument& e) {
+      std::cerr << "error: " << e.what() << "\n";
+      return kExitBadInput;
+    } catch (const std::exception& e) {
+      std::cerr << "error: " << e.what() << "\n";
+      return kExitFailure;
+    }
+    if (o.step.empty()) return kExitOk;
+  }
   const StabilityResult result = analyse(p);
   std::vector<std::complex<double>> poles;  // the dynamic ones; zeros are pure delays
   for (const auto& z : result.poles)
@@ -57,6 +309,14 @@ int run_stability(const StabilityOptions& o) {
   const double period = 1.0 / o.rate_hz;
   const StepResponse step = simulate_step(p, period, o.duration_s);
   const bool stable = result.stable();
+  if (!o.step.empty()) {
+    try {
+      write_step(o, step);
+    } catch (const std::exception& e) {
+      std::cerr << "error: " << e.what() << "\n";
+      return kExitFailure;
+    }
+  }
 
   if (o.json) {
     JsonWriter json(std::cout);
@@ -112,7 +372,13 @@ void add_stability_command(CLI::App& parent, int& exit_code) {
       "poles of the lifted one-frame loop, its spectral radius, the steady-state force and proxy\n"
       "offset for a unit device step, and 2 % settling times from a lockstep simulation.\n"
       "Exit code 0 if stable, 1 if not.\n"
-      "Example: fetouch stability --local-model p --k0 0.2 --kh 0.19   (rings: pole -0.95)");
+      "Files: --region STEM writes STEM.csv (kh, ni, spectral radius, verdict, closed-form verdict)\n"
+      "and STEM.png, the region over (Kh, N*I); --volume STEM the same over several K0 (--k0-values);\n"
+      "--step STEM the step response (time, device, proxy, surface, force). The PNGs need an X\n"
+      "display: run under xvfb-run -a on a headless machine. With --region or --volume alone the\n"
+      "exit code says whether the files were written.\n"
+      "Examples: fetouch stability --local-model p --k0 0.2 --kh 0.19   (rings: pole -0.95)\n"
+      "          xvfb-run -a fetouch stability --local-model pi --hold foh --region out/pi_foh");
   cmd->add_option("--local-model", o->local_model, "p, pi, smith or pi_smith")
       ->check(CLI::IsMember({"p", "pi", "smith", "pi_smith"}))
       ->capture_default_str();
@@ -128,6 +394,15 @@ void add_stability_command(CLI::App& parent, int& exit_code) {
   cmd->add_option("--duration", o->duration_s, "Simulated time of the step response, s")
       ->check(CLI::PositiveNumber)->capture_default_str();
   cmd->add_flag("--json", o->json, "Print a JSON report");
+  cmd->add_option("--region", o->region, "Write the stability region over (Kh, N*I) to STEM.csv and STEM.png");
+  cmd->add_option("--volume", o->volume, "Write the stability volume over K0 to STEM.csv and STEM.png");
+  cmd->add_option("--step", o->step, "Write the step response to STEM.csv and STEM.png");
+  cmd->add_option("--kh-range", o->kh_range, "Kh axis of --region/--volume: MIN MAX (default 0 .. 2.5 (K0 + B0))")
+      ->expected(2);
+  cmd->add_option("--ni-range", o->ni_range, "N*I axis of --region/--volume: MIN MAX (default as Kh)")->expected(2);
+  cmd->add_option("--points", o->points, "Grid points per axis of --region/--volume")
+      ->check(CLI::Range(2, 2001))->capture_default_str();
+  cmd->add_option("--k0-values", o->k0_values, "K0 values of --volume")->check(CLI::PositiveNumber)->capture_default_str();
   cmd->callback([o, &exit_code]() { exit_code = run_stability(*o); });
 }
 
