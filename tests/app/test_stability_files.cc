@@ -58,6 +58,13 @@ void expect_png(const fs::path& path, int width, int height) {
   EXPECT_GT(bytes.size(), 8000u) << "an almost empty image: " << path;
 }
 
+bool has_display() {
+  const char* display = std::getenv("DISPLAY");
+  return display && *display;
+}
+#define REQUIRE_DISPLAY() \
+  ASSERT_TRUE(has_display()) << "this test draws PNGs with VTK: run it under xvfb-run -a (scripts/quickstart test does)"
+
 fs::path scratch(const std::string& name) {
   const fs::path dir = fs::temp_directory_path() / ("fetouch_stability_" + name + "_" + std::to_string(::getpid()));
   fs::remove_all(dir);
@@ -70,6 +77,7 @@ bool jury_cubic(double a3, double a2, double a1, double a0) { return haptics::ju
 //   (K0+B0) z^3 - (K0+2B0) z^2 + (Kh + B0 + I (N-1)/2) z + (I (N+1)/2 - Kh),
 // and the spectral radius equals its largest root modulus.
 TEST(StabilityFiles, PiFohRegionBoundaryIsJurys) {
+  REQUIRE_DISPLAY();
   const fs::path dir = scratch("region");
   const auto r = run_command(fetouch("stability --local-model pi --hold foh -N 50 --k0 1 --b0 0 --points 81 --region " +
                                      (dir / "pi_foh").string()));
@@ -100,6 +108,7 @@ TEST(StabilityFiles, PiFohRegionBoundaryIsJurys) {
 // PI with ZOH over three K0: each verdict is the four inequalities of the architecture page, and
 // the region grows with K0.
 TEST(StabilityFiles, PiZohVolumeFollowsTheFourInequalities) {
+  REQUIRE_DISPLAY();
   const fs::path dir = scratch("volume");
   const auto r = run_command(fetouch("stability --local-model pi --hold zoh --b0 0.1 --points 41 --k0-values 0.5 1 2 --volume " +
                                      (dir / "vol.csv").string()));
@@ -125,6 +134,7 @@ TEST(StabilityFiles, PiZohVolumeFollowsTheFourInequalities) {
 // P with ZOH, K0 = 0.2, Kh = 0.19: the surface's distance to its final value shrinks by the pole
 // -0.95 every frame, and the force settles at K0 Kh / (K0 + Kh).
 TEST(StabilityFiles, StepResponseRingsWithThePole) {
+  REQUIRE_DISPLAY();
   const fs::path dir = scratch("step");
   const auto r = run_command(fetouch("stability --local-model p --k0 0.2 --kh 0.19 --duration 8 --step " + (dir / "ring").string()));
   ASSERT_EQ(r.exit_code, 0) << r.err;
