@@ -5,7 +5,8 @@ namespace fetouch::haptics {
 LocalModel::LocalModel(LocalModelKind kind, int contacts)
     : kind_(kind),
       compliance_(Eigen::MatrixXd::Zero(contacts, contacts)),
-      loop_inverse_(Eigen::MatrixXd::Identity(contacts, contacts)),
+      loop_matrix_(Eigen::MatrixXd::Identity(contacts, contacts)),
+      loop_lu_(contacts),
       integrator_(Eigen::VectorXd::Zero(contacts)),
       force_(Eigen::VectorXd::Zero(contacts)),
       error_(Eigen::VectorXd::Zero(contacts)),
@@ -22,11 +23,10 @@ void LocalModel::set_compliance(const Eigen::MatrixXd& compliance) {
 }
 
 void LocalModel::refactor() {
-  const auto n = compliance_.rows();
-  if (has_predictor())
-    loop_inverse_ = (Eigen::MatrixXd::Identity(n, n) + gains_.proportional * compliance_).inverse();
-  else
-    loop_inverse_.setIdentity();
+  if (!has_predictor()) return;
+  loop_matrix_.setIdentity();
+  loop_matrix_ += gains_.proportional * compliance_;
+  loop_lu_.compute(loop_matrix_);
 }
 
 const Eigen::VectorXd& LocalModel::step(const Eigen::VectorXd& device,
@@ -39,7 +39,7 @@ const Eigen::VectorXd& LocalModel::step(const Eigen::VectorXd& device,
     rhs_ += error_;
     rhs_ *= kh;
     if (has_integrator()) rhs_ += integrator_;
-    force_.noalias() = loop_inverse_ * rhs_;
+    force_ = loop_lu_.solve(rhs_);
     // The penetration behind the predicted surface, for the integrator.
     rhs_ = force_ - reference_force;
     error_.noalias() -= compliance_ * rhs_;
@@ -51,6 +51,9 @@ const Eigen::VectorXd& LocalModel::step(const Eigen::VectorXd& device,
     integrator_ += gains_.integral * error_;
     integrator_ = integrator_.cwiseMax(-integrator_limit_).cwiseMin(integrator_limit_);
   }
+  if (unilateral_)
+    for (Eigen::Index c = 0; c < force_.size(); ++c)
+      if (!(force_(c) > 0)) force_(c) = 0, integrator_(c) = 0;
   return force_;
 }
 

@@ -15,8 +15,12 @@
 //   without Smith:  s+ = s + I (x_h - x_held),           F = Kh (x_h - x_held) + s
 //   with Smith:     G = (I + Kh W)^-1,  F = G (Kh (x_h - x_held + W F_ref) + s),
 //                   s+ = s + I (x_h - x_held - W (F - F_ref))
-// Anti-windup: s is clamped to |s| <= s_max per contact; contact loss resets s to 0.
-// Real-time safe after construction: step() allocates nothing.
+// Anti-windup: s is clamped to |s| <= s_max per contact.
+// Unilateral contact (set_unilateral, the 3D loop's setting; the analysis keeps it off): a contact
+// whose force comes out F <= 0 is not touching: F = 0 and s = 0 (reset on contact loss). Since F
+// passes through 0 continuously as the device leaves, neither onset nor release steps the force.
+// Real-time safe after construction: step(), set_gains() and set_compliance() of the constructed
+// size allocate nothing ((I + Kh W) is factored in place by a preallocated LU).
 #pragma once
 
 #include <Eigen/Dense>
@@ -48,6 +52,7 @@ class LocalModel {
   void set_gains(const LocalModelGains& gains);
   void set_compliance(const Eigen::MatrixXd& compliance);  // W, for the Smith variants
   void set_integrator_limit(double limit) { integrator_limit_ = limit; }
+  void set_unilateral(bool unilateral) { unilateral_ = unilateral; }
   const LocalModelGains& gains() const { return gains_; }
 
   // One tick: returns F(k) and advances s.
@@ -55,6 +60,9 @@ class LocalModel {
                               const Eigen::VectorXd& reference_force) noexcept;
 
   const Eigen::VectorXd& integrator() const { return integrator_; }
+  // The penetration behind the predicted surface at the last step (e(k) - (W (F - F_ref))(k) with
+  // the predictor, e(k) without): where the proxy sits.
+  const Eigen::VectorXd& predicted_penetration() const { return error_; }
   void set_integrator(const Eigen::VectorXd& s) { integrator_ = s; }
   void reset() { integrator_.setZero(); }
 
@@ -64,8 +72,10 @@ class LocalModel {
   LocalModelKind kind_;
   LocalModelGains gains_;
   double integrator_limit_ = 1e300;
+  bool unilateral_ = false;
   Eigen::MatrixXd compliance_;       // W
-  Eigen::MatrixXd loop_inverse_;     // (I + Kh W)^-1
+  Eigen::MatrixXd loop_matrix_;      // I + Kh W
+  Eigen::PartialPivLU<Eigen::MatrixXd> loop_lu_;
   Eigen::VectorXd integrator_, force_, error_, rhs_;
 };
 

@@ -1,0 +1,155 @@
+#include "haptics/haptic_loop.h"
+
+#include <Eigen/Cholesky>
+
+#include <stdexcept>
+
+namespace fetouch::haptics {
+
+HapticLoop::HapticLoop(const HapticLoopSettings& settings, const EnvironmentUpdate& initial)
+    : settings_(settings),
+      contacts_(static_cast<int>(initial.frames.size())),
+      local_model_(settings.local_model, contacts_) {
+  if (contacts_ < 1) throw std::invalid_argument("HapticLoop: at least one contact");
+  if (settings.ratio < 1) throw std::invalid_argument("HapticLoop: the ratio N must be at least 1");
+  if (initial.compliance.rows() != 3 * contacts_ || initial.compliance.cols() != 3 * contacts_)
+    throw std::invalid_argument("HapticLoop: the compliance must be 3m x 3m");
+  local_model_.set_unilateral(true);
+  local_model_.set_integrator_limit(settings.integrator_limit_n);
+  for (FrameSlot& slot : slots_) {
+    slot.update = initial;
+    slot.normal_force = Eigen::VectorXd::Zero(contacts_);
+  }
+  FrameSlot& first = slots_[newest_];
+  first.gains = settings.gains;
+  prepare(first);
+  slots_[previous_] = first;
+  slots_[2] = first;  // sized like the others, so filling it never allocates more than once
+  local_model_.set_gains(first.gains);
+  local_model_.set_compliance(first.normal_compliance);
+  held_.resize(contacts_);
+  penetration_ = Eigen::VectorXd::Zero(contacts_);
+  zeros_ = Eigen::VectorXd::Zero(contacts_);
+  reference_ = Eigen::VectorXd::Zero(contacts_);
+  samples_.resize(contacts_);
+  outputs_.resize(contacts_);
+  safety_.assign(contacts_, ForceSafety(settings.safety));
+}
+
+int HapticLoop::free_slot() const noexcept {
+  for (int s = 0; s < 3; ++s)
+    if (s != newest_ && s != previous_ && s != pending_) return s;
+  // All three in use (an update published and not yet promoted): overwrite the pending one.
+  return pending_;
+}
+
+void HapticLoop::prepare(FrameSlot& slot) const {
+  const int m = contacts_;
+  Eigen::MatrixXd normals = Eigen::MatrixXd::Zero(3 * m, m);
+  for (int c = 0; c < m; ++c) normals.block<3, 1>(3 * c, c) = slot.update.frames[c].normal;
+  slot.normal_compliance = normals.transpose() * slot.update.compliance * normals;
+  if (slot.normal_force.size() != m) slot.normal_force = Eigen::VectorXd::Zero(m);
+  if (!settings_.schedule_gains) {
+    slot.gains = settings_.gains;
+    return;
+  }
+  GainProblem problem;
+  problem.local_model = settings_.local_model;
+  problem.hold = settings_.hold;
+  problem.ratio = settings_.ratio;
+  Eigen::LDLT<Eigen::MatrixXd> ldlt(slot.normal_compliance);
+  problem.stiffness = ldlt.solve(Eigen::MatrixXd::Identity(m, m));
+  problem.stiffness = 0.5 * (problem.stiffness + problem.stiffness.transpose()).eval();
+  if (slot.update.damping.size()) problem.damping = normals.transpose() * slot.update.damping * normals;
+  const LocalModelGains start = slots_[newest_].gains;
+  slot.selection = select_gains(problem, settings_.selection, &start);
+  // A selection that finds nothing robustly stable keeps the least unstable gains it saw; the
+  // recording shows it (selection.stable) and the safety layer still bounds the force.
+  slot.gains = slot.selection.gains;
+}
+
+void HapticLoop::promote() noexcept {
+  previous_ = newest_;
+  newest_ = pending_;
+  pending_ = -1;
+  newest_arrival_ = tick_count_;
+  const FrameSlot& slot = slots_[newest_];
+  local_model_.set_compliance(slot.normal_compliance);
+  if (slot.gains.proportional != local_model_.gains().proportional ||
+      slot.gains.integral != local_model_.gains().integral) {
+    blend_from_ = local_model_.gains();
+    blend_to_ = slot.gains;
+    blend_left_ = std::max(1, settings_.blend_ticks);
+  }
+}
+
+const std::vector<ContactOutput>& HapticLoop::tick(const std::vector<Eigen::Vector3d>& devices) noexcept {
+  const int n = settings_.ratio;
+  const int i = static_cast<int>(tick_count_ % n);
+  if (i == 0 && tick_count_ > 0 && pending_ >= 0) promote();
+
+  if (blend_left_ > 0) {
+    --blend_left_;
+    const double t = 1.0 - static_cast<double>(blend_left_) / std::max(1, settings_.blend_ticks);
+    local_model_.set_gains({blend_from_.proportional + t * (blend_to_.proportional - blend_from_.proportional),
+                            blend_from_.integral + t * (blend_to_.integral - blend_from_.integral)});
+  }
+
+  const FrameSlot& newest = slots_[newest_];
+  const FrameSlot& previous = slots_[previous_];
+  const double t = settings_.hold == HoldKind::zoh ? 1.0 : static_cast<double>(i) / n;
+  for (int c = 0; c < contacts_; ++c) {
+    if (settings_.hold == HoldKind::zoh)
+      held_[c] = newest.update.frames[c];
+    else
+      interpolate(previous.update.frames[c], newest.update.frames[c], t, held_[c]);
+    const ContactPoint point = locate(held_[c], devices[c]);
+    penetration_(c) = point.penetration;
+    reference_(c) = previous.normal_force(c) + t * (newest.normal_force(c) - previous.normal_force(c));
+  }
+  const Eigen::VectorXd& force = local_model_.step(penetration_, zeros_, reference_);
+  const Eigen::VectorXd& predicted = local_model_.predicted_penetration();
+
+  const double age_s = static_cast<double>(tick_count_ - newest_arrival_) * settings_.period_s;
+  decimated_ = i == 0;
+  for (int c = 0; c < contacts_; ++c) {
+    ContactOutput& out = outputs_[c];
+    const Eigen::Vector3d& normal = held_[c].normal;
+    out.normal_force = force(c);
+    out.penetration = penetration_(c);
+    out.in_contact = force(c) > 0;
+    out.force = safety_[c].filter(force(c) * normal, age_s);
+    // In contact the proxy sits on the (predicted) surface: the device moved out by the predicted
+    // penetration along the normal; out of contact it is the device point.
+    out.proxy = out.in_contact ? Eigen::Vector3d(devices[c] + predicted(c) * normal) : devices[c];
+    if (decimated_) {
+      ContactSample& sample = samples_[c];
+      sample.position = devices[c];
+      sample.force = -force(c) * normal;
+      sample.normal_force = force(c);
+      sample.in_contact = out.in_contact;
+    }
+  }
+  ++tick_count_;
+  return outputs_;
+}
+
+const std::vector<ContactOutput>& LockstepSession::tick(const std::vector<Eigen::Vector3d>& devices) {
+  const std::vector<ContactOutput>& out = loop_.tick(devices);
+  if (loop_.decimated()) {
+    FrameSlot& slot = loop_.pending_slot();
+    environment_.solve(loop_.samples(), loop_.frame(), slot.update);
+    for (int c = 0; c < loop_.contacts(); ++c) slot.normal_force(c) = loop_.samples()[c].normal_force;
+    loop_.prepare(slot);
+    loop_.publish();
+  }
+  return out;
+}
+
+EnvironmentUpdate initial_update(Environment& environment) {
+  EnvironmentUpdate update;
+  environment.initial(update);
+  return update;
+}
+
+}  // namespace fetouch::haptics

@@ -1,0 +1,131 @@
+// The haptic loop in 3D for m contacts: what runs every tick at 1 kHz, between device and tissue.
+//
+// Per tick k = jN + i (ARCHITECTURE.md section 3, the timing of multirate_loop.h):
+//   1. at i == 0, if an update was published during frame j - 1, it becomes the newest held one
+//      (the previous newest moves back) and its gains start blending in;
+//   2. hold: ZOH uses the newest update's contact frames; FOH interpolates the two newest;
+//   3. geometry: each device point's penetration e_c behind the held surface along its normal
+//      (contact_frame.h), and the reference force of the Smith predictor, held the same way;
+//   4. the local model on the m penetrations in normal coordinates, with the compliance projected
+//      on the normals, W_n = N' W N (N = blockdiag(n_c)); unilateral: F_c >= 0, reset on release;
+//   5. force F_c n_c on device c through its ForceSafety (finite, clamp, rate limit, watchdog);
+//      the proxy is the device point moved along n_c onto the held (or predicted) surface;
+//   6. at i == 0 the samples (device point, force -F_c n_c on the tissue) are decimated for the
+//      environment; its answer is published before the next frame starts.
+//
+// The producer side (prepare + publish: the solver thread at run time, the lockstep session here)
+// projects the new compliance on the normals and, with gain scheduling on, re-selects the gains
+// robustly (gain_selection.h), warm-started from the gains in use. tick() itself never allocates,
+// locks, throws or waits; it swaps slot indices, never copies an update.
+#pragma once
+
+#include <Eigen/Core>
+
+#include <array>
+#include <vector>
+
+#include "haptics/environment.h"
+#include "haptics/force_safety.h"
+#include "haptics/gain_selection.h"
+#include "haptics/hold.h"
+#include "haptics/local_model.h"
+
+namespace fetouch::haptics {
+
+struct HapticLoopSettings {
+  LocalModelKind local_model = LocalModelKind::pi;
+  HoldKind hold = HoldKind::foh;
+  int ratio = 50;                 // N ticks per solver frame
+  double period_s = 1e-3;         // T
+  LocalModelGains gains;          // used as given when scheduling is off; the first guess otherwise
+  bool schedule_gains = true;     // re-select the gains for every update's stiffness
+  GainSelectionOptions selection;
+  int blend_ticks = 20;           // a gain change is spread over this many ticks
+  double integrator_limit_n = 1e300;
+  ForceSafetyLimits safety;
+};
+
+// One update as the loop holds it: the environment's answer plus what the producer derived.
+struct FrameSlot {
+  EnvironmentUpdate update;
+  Eigen::MatrixXd normal_compliance;  // W_n = N' W N, m x m
+  Eigen::VectorXd normal_force;       // F_c of the samples that produced it (the Smith reference)
+  LocalModelGains gains;              // the gains for this stiffness
+  GainSelection selection;            // how they were chosen (scheduling on)
+};
+
+struct ContactOutput {
+  Eigen::Vector3d force = Eigen::Vector3d::Zero();  // sent to the device, after the safety layer
+  Eigen::Vector3d proxy = Eigen::Vector3d::Zero();  // the device point moved onto the surface
+  double normal_force = 0;                          // F_c from the local model
+  double penetration = 0;                           // e_c behind the held surface
+  bool in_contact = false;
+};
+
+class HapticLoop {
+ public:
+  // `initial`: the environment's answer at rest (Environment::initial), held during frame 0.
+  HapticLoop(const HapticLoopSettings& settings, const EnvironmentUpdate& initial);
+
+  // One tick with the device points (m of them). Real-time safe.
+  const std::vector<ContactOutput>& tick(const std::vector<Eigen::Vector3d>& devices) noexcept;
+
+  // True right after a tick that started a frame: samples() holds what to hand the environment.
+  bool decimated() const { return decimated_; }
+  const std::vector<ContactSample>& samples() const { return samples_; }
+  long frame() const { return tick_count_ == 0 ? 0 : (tick_count_ - 1) / settings_.ratio; }
+
+  // Producer side: the slot to fill (update.frames, compliance, ...) with the answer to samples(),
+  // then prepare() and publish(). Allocates (gain selection); never call from the tick.
+  FrameSlot& pending_slot() { return slots_[free_slot()]; }
+  void prepare(FrameSlot& slot) const;
+  void publish() noexcept { pending_ = free_slot(); }
+
+  int contacts() const { return contacts_; }
+  long ticks() const { return tick_count_; }
+  const HapticLoopSettings& settings() const { return settings_; }
+  const LocalModelGains& gains() const { return local_model_.gains(); }
+  const FrameSlot& newest() const { return slots_[newest_]; }
+  const ForceSafety& safety(int contact) const { return safety_[contact]; }
+
+ private:
+  int free_slot() const noexcept;
+  void promote() noexcept;
+
+  HapticLoopSettings settings_;
+  int contacts_;
+  LocalModel local_model_;
+  std::array<FrameSlot, 3> slots_;
+  int newest_ = 0, previous_ = 1, pending_ = -1;
+  long tick_count_ = 0, newest_arrival_ = 0;
+  bool decimated_ = false;
+
+  // Gain blend: from -> to over blend_ticks.
+  LocalModelGains blend_from_, blend_to_;
+  int blend_left_ = 0;
+
+  std::vector<ContactFrame> held_;
+  Eigen::VectorXd penetration_, zeros_, reference_;
+  std::vector<ContactSample> samples_;
+  std::vector<ContactOutput> outputs_;
+  std::vector<ForceSafety> safety_;
+};
+
+// The lockstep session (replay, tests, studies): after every tick that started a frame, the
+// environment solves at once and its answer is published for the next frame. Bit-for-bit
+// reproducible. The environment's solve runs in the caller's thread, so this is not the real-time
+// path (issue 6 wires that with a lock-free hand-over).
+class LockstepSession {
+ public:
+  LockstepSession(HapticLoop& loop, Environment& environment) : loop_(loop), environment_(environment) {}
+  const std::vector<ContactOutput>& tick(const std::vector<Eigen::Vector3d>& devices);
+
+ private:
+  HapticLoop& loop_;
+  Environment& environment_;
+};
+
+// Everything a session needs from the environment's rest state.
+EnvironmentUpdate initial_update(Environment& environment);
+
+}  // namespace fetouch::haptics
