@@ -46,22 +46,30 @@ class UncertaintySet {
 
   double smallest_stiffness() const { return smallest_; }
 
-  double radius(const LocalModelGains& gains, int& evaluations) const {
+  // The robust radius: the largest over every (mode, scale). A search only needs to know whether a
+  // trial beats the best so far, so the scan stops as soon as one loop exceeds `cutoff`, starting
+  // from the (mode, scale) that was worst last time: most rejected trials cost one evaluation.
+  double radius(const LocalModelGains& gains, int& evaluations,
+                double cutoff = std::numeric_limits<double>::infinity()) const {
     ScalarLoop loop;
     loop.local_model = problem_.local_model;
     loop.hold = problem_.hold;
     loop.ratio = problem_.ratio;
     loop.gains = gains;
     double worst = 0;
-    for (const Mode& mode : modes_) {
+    const int count = static_cast<int>(modes_.size() * scales_.size());
+    const int first = worst_index_;
+    for (int e = 0; e < count; ++e) {
+      const int index = (first + e) % count;
+      const Mode& mode = modes_[index / scales_.size()];
       loop.damping = mode.damping;
       loop.compliance = 1.0 / mode.stiffness;
-      for (double s : scales_) {
-        loop.stiffness = s * mode.stiffness;
-        const double r = scalar_spectral_radius(loop);
-        ++evaluations;
-        if (!(r <= worst)) worst = std::isnan(r) ? std::numeric_limits<double>::infinity() : r;
-      }
+      loop.stiffness = scales_[index % scales_.size()] * mode.stiffness;
+      double r = scalar_spectral_radius(loop);
+      ++evaluations;
+      if (std::isnan(r)) r = std::numeric_limits<double>::infinity();
+      if (r > worst) worst = r, worst_index_ = index;
+      if (worst > cutoff) break;
     }
     return worst;
   }
@@ -71,6 +79,7 @@ class UncertaintySet {
   std::vector<Mode> modes_;
   std::vector<double> scales_;
   double smallest_ = 1;
+  mutable int worst_index_ = 0;
 };
 
 // P and Smith: the stiffest Kh whose radius is at most the settle radius.
@@ -86,7 +95,7 @@ GainSelection select_proportional(const UncertaintySet& set, const GainProblem& 
   // gain is the stiffest on the grid.
   for (int g = grid - 1; g >= 0; --g) {
     const double kh = lambda * 0.01 * std::pow(top / 0.01, static_cast<double>(g) / (grid - 1));
-    const double r = set.radius({kh, 0}, best.evaluations);
+    const double r = set.radius({kh, 0}, best.evaluations, std::max(options.settle_radius, best_radius));
     if (r < best_radius) best_radius = r, best_kh = kh;
     if (r <= options.settle_radius) {
       accepted = kh;
@@ -99,7 +108,7 @@ GainSelection select_proportional(const UncertaintySet& set, const GainProblem& 
     if (high > 0)
       for (int it = 0; it < 12; ++it) {  // bisect the crossing to 0.1 % or so
         const double mid = std::sqrt(low * high);
-        (set.radius({mid, 0}, best.evaluations) <= options.settle_radius ? low : high) = mid;
+        (set.radius({mid, 0}, best.evaluations, options.settle_radius) <= options.settle_radius ? low : high) = mid;
       }
     best.gains = {low, 0};
   } else {
@@ -131,7 +140,7 @@ GainSelection select_integral(const UncertaintySet& set, const GainProblem& prob
     for (int a = 0; a < grid; ++a)
       for (int b = 0; b < grid; ++b) {
         const double trial_kh = lambda * 3.0 * (a + 0.5) / grid, trial_ni = lambda * 2.0 * (b + 0.5) / grid;
-        const double r = set.radius({trial_kh, trial_ni / n}, best.evaluations);
+        const double r = set.radius({trial_kh, trial_ni / n}, best.evaluations, best_radius);
         if (r < best_radius) best_radius = r, kh = trial_kh, ni = trial_ni;
       }
   }
@@ -149,7 +158,7 @@ GainSelection select_integral(const UncertaintySet& set, const GainProblem& prob
       const int move = (first + m) % 16;
       const double trial_kh = kh + moves[move][0] * step_kh, trial_ni = ni + moves[move][1] * step_ni;
       if (trial_kh <= 0 || trial_ni <= 0) continue;
-      const double r = set.radius({trial_kh, trial_ni / n}, best.evaluations);
+      const double r = set.radius({trial_kh, trial_ni / n}, best.evaluations, best_radius);
       if (r < best_radius * (1 - 1e-9)) best_radius = r, kh = trial_kh, ni = trial_ni, moved = true, first = move;
     }
     if (!moved) step_kh /= 2, step_ni /= 2;

@@ -64,7 +64,11 @@ struct Recurrence {
 
 }  // namespace
 
-double cubic_max_root_modulus(double a3, double a2, double a1, double a0) {
+namespace {
+
+// The largest real root of a3 z^3 + a2 z^2 + a1 z + a0 (a3 != 0): Cardano's formula (the
+// trigonometric form when all three roots are real), polished by two Newton steps.
+double cubic_largest_real_root(double a3, double a2, double a1, double a0) {
   const double c2 = a2 / a3, c1 = a1 / a3, c0 = a0 / a3;
   // Depressed cubic t^3 + p t + q with z = t - c2/3.
   const double shift = c2 / 3;
@@ -75,15 +79,55 @@ double cubic_max_root_modulus(double a3, double a2, double a1, double a0) {
   if (disc >= 0) {
     const double root = std::sqrt(disc);
     t = std::cbrt(-half_q + root) + std::cbrt(-half_q - root);
-  } else {  // three real roots: trigonometric form, take the largest t
+  } else {  // three real roots: trigonometric form, the largest
     const double r = std::sqrt(-third_p);
     t = 2 * r * std::cos(std::acos(std::clamp(-half_q / (r * r * r), -1.0, 1.0)) / 3);
   }
   double z = t - shift;
-  for (int it = 0; it < 2; ++it) {  // Newton polish on the monic cubic
+  for (int it = 0; it < 2; ++it) {
     const double value = ((z + c2) * z + c1) * z + c0, slope = (3 * z + 2 * c2) * z + c1;
     if (slope != 0) z -= value / slope;
   }
+  return z;
+}
+
+// max |y + shift| over the roots y of y^2 + b y + c (complex b, c allowed).
+double shifted_quadratic_max_modulus(std::complex<double> b, std::complex<double> c, double shift) {
+  const std::complex<double> root = std::sqrt(b * b - 4.0 * c);
+  const std::complex<double> y1 = (-b + root) / 2.0, y2 = (-b - root) / 2.0;
+  return std::max(std::abs(y1 + shift), std::abs(y2 + shift));
+}
+
+// max |root| of the monic quartic z^4 + a z^3 + b z^2 + c z + d by Ferrari's method: with
+// z = y - a/4, y^4 + p y^2 + q y + r = (y^2 + p/2 + m)^2 - (sqrt(2m) y - q / (2 sqrt(2m)))^2 for
+// m a positive root of the resolvent 8m^3 + 8p m^2 + (2p^2 - 8r) m - q^2.
+double quartic_max_root_modulus(double a, double b, double c, double d) {
+  const double shift = -a / 4;
+  const double p = b - 3 * a * a / 8, q = c - a * b / 2 + a * a * a / 8;
+  const double r = d - a * c / 4 + a * a * b / 16 - 3 * a * a * a * a / 256;
+  const double scale = 1 + std::abs(p) + std::sqrt(std::abs(r));
+  if (std::abs(q) < 1e-14 * scale * std::sqrt(scale)) {  // biquadratic: y^2 = t, t^2 + p t + r = 0
+    const std::complex<double> root = std::sqrt(std::complex<double>(p * p - 4 * r, 0));
+    double best = 0;
+    for (const std::complex<double> t : {(-p + root) / 2.0, (-p - root) / 2.0}) {
+      const std::complex<double> y = std::sqrt(t);
+      best = std::max({best, std::abs(y + shift), std::abs(-y + shift)});
+    }
+    return best;
+  }
+  const double m = cubic_largest_real_root(8, 8 * p, 2 * p * p - 8 * r, -q * q);
+  const double s = std::sqrt(2 * std::max(m, 0.0));
+  if (s == 0) return std::nan("");
+  const double first = shifted_quadratic_max_modulus(s, p / 2 + m - q / (2 * s), shift);
+  const double second = shifted_quadratic_max_modulus(-s, p / 2 + m + q / (2 * s), shift);
+  return std::max(first, second);
+}
+
+}  // namespace
+
+double cubic_max_root_modulus(double a3, double a2, double a1, double a0) {
+  const double c2 = a2 / a3, c1 = a1 / a3;
+  const double z = cubic_largest_real_root(a3, a2, a1, a0);
   // Deflate: z^3 + c2 z^2 + c1 z + c0 = (z - root)(z^2 + d1 z + d0).
   const double d1 = c2 + z, d0 = c1 + z * d1;
   return std::max(std::abs(z), quadratic_max_root_modulus(1, d1, d0));
@@ -91,19 +135,26 @@ double cubic_max_root_modulus(double a3, double a2, double a1, double a0) {
 
 double recurrence_spectral_radius(const ScalarLoop& p) {
   const Recurrence recurrence(p);
-  // Active coordinates: ZOH never reads h or f.
-  int active[5], n = 0;
-  for (int c = 0; c < 5; ++c) {
-    if (p.hold == HoldKind::zoh && (c == 1 || c == 3)) continue;
-    if (!recurrence.integrator && c == 4) continue;
-    active[n++] = c;
-  }
+  // Reduced coordinates. ZOH never reads h or f. FOH reads them only through u(0) = -h + w f, so
+  // the state v = -h + w f replaces both (the dropped direction is an eigenvalue 0): with the
+  // frame's outputs h' = ps and f' = pf, v' = -ps + w pf. Reduced: [ps, pf, v (FOH), s (PI)].
+  const bool foh = p.hold == HoldKind::foh;
+  const double w = recurrence.predictor ? p.compliance : 0.0;
+  int n = 2;
+  const int v_index = foh ? n++ : -1;
+  const int s_index = recurrence.integrator ? n++ : -1;
   SmallMatrix phi(n, n);
   for (int a = 0; a < n; ++a) {
     double x[5] = {0, 0, 0, 0, 0}, y[5];
-    x[active[a]] = 1;
+    if (a == 0) x[0] = 1;
+    if (a == 1) x[2] = 1;
+    if (a == v_index) x[1] = -1;  // h = -1, f = 0: v = 1
+    if (a == s_index) x[4] = 1;
     recurrence.frame(x, y);
-    for (int b = 0; b < n; ++b) phi(b, a) = y[active[b]];
+    phi(0, a) = y[0];
+    phi(1, a) = y[2];
+    if (v_index >= 0) phi(v_index, a) = -y[1] + w * y[3];
+    if (s_index >= 0) phi(s_index, a) = y[4];
   }
   if (n == 2) {
     const double trace = phi.trace(), det = phi(0, 0) * phi(1, 1) - phi(0, 1) * phi(1, 0);
@@ -117,10 +168,23 @@ double recurrence_spectral_radius(const ScalarLoop& p) {
     const double det = phi.determinant();
     return cubic_max_root_modulus(1, -trace, minors, -det);
   }
-  Eigen::EigenSolver<SmallMatrix> eigen(phi, /*computeEigenvectors=*/false);
-  double radius = 0;
-  for (int i = 0; i < n; ++i) radius = std::max(radius, std::abs(eigen.eigenvalues()[i]));
-  return radius;
+  // n == 4 (PI variants with FOH): the characteristic polynomial by Faddeev-LeVerrier,
+  // z^4 + c3 z^3 + c2 z^2 + c1 z + c0, then Ferrari; the general eigenvalue solver if that fails.
+  const Eigen::Matrix4d a = phi;
+  Eigen::Matrix4d mk = a;
+  const double c3 = -mk.trace();
+  mk = a * (mk + c3 * Eigen::Matrix4d::Identity());
+  const double c2 = -mk.trace() / 2;
+  mk = a * (mk + c2 * Eigen::Matrix4d::Identity());
+  const double c1 = -mk.trace() / 3;
+  mk = a * (mk + c1 * Eigen::Matrix4d::Identity());
+  const double c0 = -mk.trace() / 4;
+  const double radius = quartic_max_root_modulus(c3, c2, c1, c0);
+  if (std::isfinite(radius)) return radius;
+  Eigen::EigenSolver<Eigen::Matrix4d> eigen(a, /*computeEigenvectors=*/false);
+  double general = 0;
+  for (int i = 0; i < 4; ++i) general = std::max(general, std::abs(eigen.eigenvalues()[i]));
+  return general;
 }
 
 double scalar_spectral_radius(const ScalarLoop& p) {

@@ -12,7 +12,7 @@
 //     integrator:   s <- s + I e            (PI and PI + Smith)
 //     i == 0:       pf' = F,  ps' = (F + b ps) / (k + b)    (decimation and the environment)
 // For ZOH, h and f never reach the loop (their columns are zero) and the state shrinks to
-// [ps, pf, s]. The frame is summed in closed form (scalar_loop.cc). For P and PI the closed-form
+// [ps, pf, s]; for FOH they enter only as v = -h + w f, and the state is [ps, pf, v, s]. The frame is summed in closed form (scalar_loop.cc). For P and PI the closed-form
 // polynomials of stability_analysis.h are cheaper still.
 #pragma once
 
