@@ -1,0 +1,134 @@
+// Tissue materials in total Lagrangian form: for a deformation gradient F, the strain energy
+// density psi(F), the first Piola-Kirchhoff stress P = dpsi/dF and its consistent tangent
+// A = dP/dF (A_iJkL = dP_iJ / dF_kL), which Newton's method needs for quadratic convergence.
+//
+// The hyperelastic models are isotropic: psi depends on F through I1 = tr C, I2 = (I1^2 - tr C^2)/2
+// and J = det F (C = F'F). Each model gives psi and its first and second partial derivatives in
+// (I1, I2, J); InvariantMaterial turns them into P and A with
+//   dI1/dF = 2F,   dI2/dF = 2(I1 F - F C),   dJ/dF = J F^-T,
+//   d2I1 = 2 d_ik d_JL,
+//   d2I2 = 4 F_iJ F_kL + 2 I1 d_ik d_JL - 2 d_ik C_LJ - 2 F_iL F_kJ - 2 b_ik d_JL   (b = F F'),
+//   d2J  = J (F^-T_iJ F^-T_kL - F^-T_iL F^-T_kJ).
+// Models (mu, lambda Lame constants; kappa bulk modulus; U(J) = kappa/4 (J^2 - 1 - 2 ln J)):
+//   linear elastic            sigma = lambda tr(eps) I + 2 mu eps, eps = sym(F) - I  (small strain;
+//                             the reference, and not objective: a rotation strains it)
+//   Saint Venant-Kirchhoff    psi = lambda/2 (tr E)^2 + mu tr(E^2),   E = (C - I)/2
+//   neo-Hookean               psi = mu/2 (I1 - 3) - mu ln J + lambda/2 (ln J)^2
+//   neo-Hookean, nearly
+//   incompressible            psi = mu/2 (J^-2/3 I1 - 3) + U(J)
+//   Mooney-Rivlin             psi = c10 (J^-2/3 I1 - 3) + c01 (J^-4/3 I2 - 3) + U(J)
+// All reduce to the linear elastic tangent at F = I (tests check it), with lambda = kappa - 2mu/3
+// for the decoupled models and mu = 2 (c10 + c01) for Mooney-Rivlin.
+#pragma once
+
+#include <deal.II/base/tensor.h>
+
+#include <array>
+#include <memory>
+#include <string>
+
+#include "config/scene.h"
+
+namespace fetouch::fem {
+
+using Tensor2 = dealii::Tensor<2, 3>;
+using Tensor4 = dealii::Tensor<4, 3>;
+
+class Material {
+ public:
+  virtual ~Material() = default;
+  virtual std::string name() const = 0;
+  // psi(F); +infinity where J <= 0 (an inverted element has no energy a solver may accept).
+  virtual double energy(const Tensor2& F) const = 0;
+  // P(F) and, if `tangent` is not null, A(F). Returns false (and leaves them unset) if J <= 0.
+  virtual bool evaluate(const Tensor2& F, Tensor2& stress, Tensor4* tangent) const = 0;
+  // The small-strain shear modulus and the bulk modulus: for time steps, penalties, scaling.
+  virtual double shear_modulus() const = 0;
+  virtual double bulk_modulus() const = 0;
+};
+
+class LinearElastic final : public Material {
+ public:
+  LinearElastic(double lambda, double mu) : lambda_(lambda), mu_(mu) {}
+  std::string name() const override { return "linear_elastic"; }
+  double energy(const Tensor2& F) const override;
+  bool evaluate(const Tensor2& F, Tensor2& stress, Tensor4* tangent) const override;
+  double shear_modulus() const override { return mu_; }
+  double bulk_modulus() const override { return lambda_ + 2 * mu_ / 3; }
+
+ private:
+  double lambda_, mu_;
+};
+
+// psi and its derivatives in (I1, I2, J): d = [psi_1, psi_2, psi_J], h the symmetric Hessian.
+struct InvariantDerivatives {
+  double psi = 0;
+  std::array<double, 3> d{0, 0, 0};
+  std::array<std::array<double, 3>, 3> h{{{0, 0, 0}, {0, 0, 0}, {0, 0, 0}}};
+};
+
+class InvariantMaterial : public Material {
+ public:
+  double energy(const Tensor2& F) const override;
+  bool evaluate(const Tensor2& F, Tensor2& stress, Tensor4* tangent) const override;
+  // The model itself: psi and its partial derivatives at (I1, I2, J), J > 0.
+  virtual InvariantDerivatives derivatives(double i1, double i2, double j) const = 0;
+};
+
+class SaintVenantKirchhoff final : public InvariantMaterial {
+ public:
+  SaintVenantKirchhoff(double lambda, double mu) : lambda_(lambda), mu_(mu) {}
+  std::string name() const override { return "saint_venant_kirchhoff"; }
+  InvariantDerivatives derivatives(double i1, double i2, double j) const override;
+  double shear_modulus() const override { return mu_; }
+  double bulk_modulus() const override { return lambda_ + 2 * mu_ / 3; }
+
+ private:
+  double lambda_, mu_;
+};
+
+class NeoHookean final : public InvariantMaterial {
+ public:
+  NeoHookean(double lambda, double mu) : lambda_(lambda), mu_(mu) {}
+  std::string name() const override { return "neo_hookean"; }
+  InvariantDerivatives derivatives(double i1, double i2, double j) const override;
+  double shear_modulus() const override { return mu_; }
+  double bulk_modulus() const override { return lambda_ + 2 * mu_ / 3; }
+
+ private:
+  double lambda_, mu_;
+};
+
+// The decoupled (isochoric + volumetric) models, for nearly incompressible tissue.
+class NearlyIncompressibleNeoHookean final : public InvariantMaterial {
+ public:
+  NearlyIncompressibleNeoHookean(double kappa, double mu) : kappa_(kappa), mu_(mu) {}
+  std::string name() const override { return "neo_hookean_incompressible"; }
+  InvariantDerivatives derivatives(double i1, double i2, double j) const override;
+  double shear_modulus() const override { return mu_; }
+  double bulk_modulus() const override { return kappa_; }
+
+ private:
+  double kappa_, mu_;
+};
+
+class MooneyRivlin final : public InvariantMaterial {
+ public:
+  MooneyRivlin(double c10, double c01, double kappa) : c10_(c10), c01_(c01), kappa_(kappa) {}
+  std::string name() const override { return "mooney_rivlin"; }
+  InvariantDerivatives derivatives(double i1, double i2, double j) const override;
+  double shear_modulus() const override { return 2 * (c10_ + c01_); }
+  double bulk_modulus() const override { return kappa_; }
+
+ private:
+  double c10_, c01_, kappa_;
+};
+
+// Lame constants from Young's modulus and Poisson's ratio.
+double lame_lambda(double youngs_modulus, double poisson_ratio);
+double lame_mu(double youngs_modulus, double poisson_ratio);
+
+// The scene's material.
+std::unique_ptr<Material> make_material(const config::Material& settings);
+
+}  // namespace fetouch::fem
