@@ -1,0 +1,325 @@
+#include "fem/quasi_static_solver.h"
+
+#include <deal.II/base/function.h>
+#include <deal.II/base/quadrature_lib.h>
+#include <deal.II/dofs/dof_handler.h>
+#include <deal.II/dofs/dof_tools.h>
+#include <deal.II/fe/fe_q.h>
+#include <deal.II/fe/fe_simplex_p.h>
+#include <deal.II/fe/fe_system.h>
+#include <deal.II/fe/fe_values.h>
+#include <deal.II/fe/mapping_fe.h>
+#include <deal.II/fe/mapping_q.h>
+#include <deal.II/grid/grid_tools.h>
+#include <deal.II/lac/affine_constraints.h>
+#include <deal.II/lac/dynamic_sparsity_pattern.h>
+#include <deal.II/lac/full_matrix.h>
+#include <deal.II/lac/petsc_solver.h>
+#include <deal.II/lac/petsc_sparse_matrix.h>
+#include <deal.II/lac/petsc_vector.h>
+#include <deal.II/lac/solver_control.h>
+#include <deal.II/lac/vector.h>
+#include <deal.II/numerics/vector_tools.h>
+
+#include <cmath>
+#include <map>
+#include <stdexcept>
+
+namespace fetouch::fem {
+
+using namespace dealii;
+
+struct QuasiStaticSolver::Impl {
+  const Triangulation<3>& tria;
+  const Material& material;
+  bool simplex;
+  std::unique_ptr<FiniteElement<3>> fe;
+  std::unique_ptr<Mapping<3>> mapping;
+  std::unique_ptr<Quadrature<3>> quadrature;
+  std::unique_ptr<Quadrature<2>> face_quadrature;
+  DoFHandler<3> dof;
+  AffineConstraints<double> constraints;  // homogeneous: the Newton update's
+  PETScWrappers::MPI::SparseMatrix matrix;
+  Vector<double> u;
+
+  struct Prescribed {
+    unsigned int boundary;
+    std::array<bool, 3> components;
+    std::function<Tensor<1, 3>(const Point<3>&)> field;
+  };
+  // g(x) scaled by the load factor, as a deal.II Function.
+  class ScaledField : public Function<3> {
+   public:
+    ScaledField(const std::function<Tensor<1, 3>(const Point<3>&)>& field, double lambda)
+        : Function<3>(3), field_(field), lambda_(lambda) {}
+    double value(const Point<3>& p, const unsigned int component) const override {
+      return lambda_ * field_(p)[component];
+    }
+   private:
+    const std::function<Tensor<1, 3>(const Point<3>&)>& field_;
+    double lambda_;
+  };
+  struct Traction {
+    unsigned int boundary;
+    Tensor<1, 3> value;
+  };
+  std::vector<Prescribed> prescribed;
+  std::vector<Traction> tractions;
+
+  Impl(const Triangulation<3>& t, const Material& m, int degree) : tria(t), material(m), dof(t) {
+    if (degree < 1 || degree > 2) throw std::invalid_argument("element degree must be 1 or 2");
+    simplex = tria.all_reference_cells_are_simplex();
+    if (simplex) {
+      fe = std::make_unique<FESystem<3>>(FE_SimplexP<3>(degree), 3);
+      mapping = std::make_unique<MappingFE<3>>(FE_SimplexP<3>(1));
+      quadrature = std::make_unique<QGaussSimplex<3>>(degree + 1);
+      face_quadrature = std::make_unique<QGaussSimplex<2>>(degree + 1);
+    } else if (tria.all_reference_cells_are_hyper_cube()) {
+      fe = std::make_unique<FESystem<3>>(FE_Q<3>(degree), 3);
+      mapping = std::make_unique<MappingQ<3>>(1);
+      quadrature = std::make_unique<QGauss<3>>(degree + 1);
+      face_quadrature = std::make_unique<QGauss<2>>(degree + 1);
+    } else {
+      throw std::invalid_argument("mixed tetrahedral and hexahedral meshes are not supported");
+    }
+    dof.distribute_dofs(*fe);
+    u.reinit(dof.n_dofs());
+  }
+
+  void setup_constraints() {
+    constraints.clear();
+    for (const Prescribed& p : prescribed)
+      VectorTools::interpolate_boundary_values(*mapping, dof, p.boundary, Functions::ZeroFunction<3>(3), constraints,
+                                               ComponentMask({p.components[0], p.components[1], p.components[2]}));
+    constraints.close();
+    DynamicSparsityPattern dsp(dof.n_dofs());
+    DoFTools::make_sparsity_pattern(dof, dsp, constraints, /*keep_constrained_dofs=*/false);
+    const IndexSet owned = complete_index_set(dof.n_dofs());
+    matrix.reinit(owned, owned, dsp, MPI_COMM_SELF);
+  }
+
+  // u on the prescribed components := lambda * value.
+  void apply_prescribed(double lambda) {
+    for (const Prescribed& p : prescribed) {
+      std::map<types::global_dof_index, double> values;
+      VectorTools::interpolate_boundary_values(*mapping, dof, p.boundary, ScaledField(p.field, lambda), values,
+                                               ComponentMask({p.components[0], p.components[1], p.components[2]}));
+      for (const auto& [index, value] : values) u[index] = value;
+    }
+  }
+
+  // The residual r = f_ext(lambda) - f_int(u), constrained entries zero, and (if `tangent`) K.
+  // `internal`, if given, receives f_int without constraints (for reactions). False if J <= 0.
+  bool assemble(double lambda, Vector<double>& r, bool tangent, Vector<double>* internal = nullptr) {
+    const FEValuesExtractors::Vector displacement(0);
+    FEValues<3> values(*mapping, *fe, *quadrature, update_gradients | update_JxW_values);
+    FEFaceValues<3> face_values(*mapping, *fe, *face_quadrature, update_values | update_JxW_values);
+    const unsigned int n = fe->n_dofs_per_cell(), nq = quadrature->size();
+    FullMatrix<double> cell_matrix(n, n);
+    Vector<double> cell_rhs(n), cell_internal(n);
+    std::vector<types::global_dof_index> indices(n);
+    std::vector<Tensor<2, 3>> grad_u(nq);
+    std::vector<unsigned int> component(n);
+    for (unsigned int i = 0; i < n; ++i) component[i] = fe->system_to_component_index(i).first;
+    std::vector<Tensor<1, 3>> grad_phi(n);
+    r = 0;
+    if (internal) *internal = 0;
+    if (tangent) matrix = 0;
+    Tensor2 P;
+    Tensor4 A;
+    for (const auto& cell : dof.active_cell_iterators()) {
+      values.reinit(cell);
+      cell_matrix = 0;
+      cell_rhs = 0;
+      cell_internal = 0;
+      values[displacement].get_function_gradients(u, grad_u);
+      for (unsigned int q = 0; q < nq; ++q) {
+        Tensor2 F = grad_u[q];
+        for (int d = 0; d < 3; ++d) F[d][d] += 1;
+        if (!material.evaluate(F, P, tangent ? &A : nullptr)) return false;
+        const double jxw = values.JxW(q);
+        for (unsigned int i = 0; i < n; ++i) grad_phi[i] = values.shape_grad_component(i, q, component[i]);
+        for (unsigned int i = 0; i < n; ++i) {
+          const unsigned int ci = component[i];
+          double f = 0;
+          for (int J = 0; J < 3; ++J) f += P[ci][J] * grad_phi[i][J];
+          cell_internal(i) += f * jxw;
+          if (!tangent) continue;
+          for (unsigned int j = 0; j < n; ++j) {
+            const unsigned int cj = component[j];
+            double k = 0;
+            for (int J = 0; J < 3; ++J)
+              for (int L = 0; L < 3; ++L) k += grad_phi[i][J] * A[ci][J][cj][L] * grad_phi[j][L];
+            cell_matrix(i, j) += k * jxw;
+          }
+        }
+      }
+      for (unsigned int i = 0; i < n; ++i) cell_rhs(i) = -cell_internal(i);
+      for (const unsigned int f : cell->face_indices()) {
+        if (!cell->face(f)->at_boundary()) continue;
+        for (const Traction& t : tractions) {
+          if (cell->face(f)->boundary_id() != t.boundary) continue;
+          face_values.reinit(cell, f);
+          for (unsigned int q = 0; q < face_quadrature->size(); ++q)
+            for (unsigned int i = 0; i < n; ++i)
+              cell_rhs(i) += lambda * t.value[component[i]] * face_values.shape_value_component(i, q, component[i]) *
+                             face_values.JxW(q);
+        }
+      }
+      cell->get_dof_indices(indices);
+      if (internal) internal->add(indices, cell_internal);
+      if (tangent)
+        constraints.distribute_local_to_global(cell_matrix, cell_rhs, indices, matrix, r);
+      else
+        constraints.distribute_local_to_global(cell_rhs, indices, r);
+    }
+    if (tangent) matrix.compress(VectorOperation::add);
+    return true;
+  }
+
+  void solve_linear(const Vector<double>& rhs, Vector<double>& du) {
+    const IndexSet owned = complete_index_set(dof.n_dofs());
+    PETScWrappers::MPI::Vector b(owned, MPI_COMM_SELF), x(owned, MPI_COMM_SELF);
+    for (types::global_dof_index i = 0; i < rhs.size(); ++i) b[i] = rhs[i];
+    b.compress(VectorOperation::insert);
+    SolverControl control(1, 0);
+    PETScWrappers::SparseDirectMUMPS mumps(control, MPI_COMM_SELF);
+    mumps.set_symmetric_mode(true);
+    mumps.solve(matrix, x, b);
+    du.reinit(rhs.size());
+    for (types::global_dof_index i = 0; i < rhs.size(); ++i) du[i] = x[i];
+    constraints.distribute(du);
+  }
+
+  StepReport newton(double lambda, const NewtonSettings& s) {
+    StepReport report;
+    report.load_factor = lambda;
+    apply_prescribed(lambda);
+    Vector<double> r(dof.n_dofs()), du, trial_r(dof.n_dofs());
+    double reference = -1;
+    for (int it = 0; it <= s.max_iterations; ++it) {
+      if (!assemble(lambda, r, /*tangent=*/true)) {
+        report.failure = "an element inverted (J <= 0)";
+        return report;
+      }
+      const double norm = r.l2_norm();
+      report.residuals.push_back(norm);
+      if (!std::isfinite(norm)) {
+        report.failure = "the residual is not finite";
+        return report;
+      }
+      if (reference < 0) reference = norm;
+      if (norm <= s.relative_tolerance * reference || norm <= s.absolute_tolerance) {
+        report.converged = true;
+        report.iterations = it;
+        return report;
+      }
+      if (it == s.max_iterations) break;
+      solve_linear(r, du);
+      // Backtracking: halve until the residual decreases and no element inverts.
+      const Vector<double> start = u;
+      double alpha = 1;
+      bool accepted = false;
+      for (int b = 0; b < 10 && !accepted; ++b, alpha /= 2) {
+        u = start;
+        u.add(alpha, du);
+        if (!assemble(lambda, trial_r, /*tangent=*/false)) continue;
+        accepted = trial_r.l2_norm() < (1 - 1e-4 * alpha) * norm || b == 9;
+      }
+      if (!accepted) {
+        u = start;
+        report.failure = "the line search found no admissible step";
+        return report;
+      }
+    }
+    report.iterations = s.max_iterations;
+    report.failure = "no convergence in " + std::to_string(s.max_iterations) + " Newton iterations";
+    return report;
+  }
+};
+
+QuasiStaticSolver::QuasiStaticSolver(const Triangulation<3>& triangulation, const Material& material, int degree)
+    : impl_(std::make_unique<Impl>(triangulation, material, degree)) {}
+
+QuasiStaticSolver::~QuasiStaticSolver() = default;
+
+void QuasiStaticSolver::prescribe_displacement(unsigned int boundary_id, std::array<bool, 3> components,
+                                               const Tensor<1, 3>& value) {
+  impl_->prescribed.push_back({boundary_id, components, [value](const Point<3>&) { return value; }});
+}
+
+void QuasiStaticSolver::prescribe_displacement(unsigned int boundary_id, std::array<bool, 3> components,
+                                               std::function<Tensor<1, 3>(const Point<3>&)> field) {
+  impl_->prescribed.push_back({boundary_id, components, std::move(field)});
+}
+
+void QuasiStaticSolver::apply_traction(unsigned int boundary_id, const Tensor<1, 3>& traction) {
+  impl_->tractions.push_back({boundary_id, traction});
+}
+
+unsigned int QuasiStaticSolver::dofs() const { return impl_->dof.n_dofs(); }
+
+SolveReport QuasiStaticSolver::solve(const NewtonSettings& s) {
+  impl_->setup_constraints();
+  SolveReport report;
+  double done = 0, increment = 1.0 / std::max(1, s.load_steps);
+  while (done < 1 - 1e-12) {
+    const double target = std::min(1.0, done + increment);
+    const Vector<double> last_good = impl_->u;
+    StepReport step = impl_->newton(target, s);
+    report.total_iterations += static_cast<int>(step.residuals.size()) - 1;
+    const bool ok = step.converged;
+    report.steps.push_back(step);
+    if (ok) {
+      done = target;
+      continue;
+    }
+    impl_->u = last_good;  // roll back
+    if (++report.cuts > s.max_cuts) {
+      report.failure = "load step at factor " + std::to_string(target) + " failed after " + std::to_string(s.max_cuts) +
+                       " cuts: " + step.failure;
+      return report;
+    }
+    increment /= 2;
+  }
+  report.converged = true;
+  return report;
+}
+
+Tensor<1, 3> QuasiStaticSolver::boundary_force(unsigned int boundary_id) const {
+  Vector<double> r(impl_->dof.n_dofs()), internal(impl_->dof.n_dofs());
+  if (!impl_->assemble(1.0, r, false, &internal)) throw std::runtime_error("boundary_force: an element is inverted");
+  Tensor<1, 3> force;
+  for (int c = 0; c < 3; ++c) {
+    ComponentMask mask(3, false);
+    mask.set(c, true);
+    const IndexSet dofs = DoFTools::extract_boundary_dofs(impl_->dof, mask, {types::boundary_id(boundary_id)});
+    for (const auto i : dofs) force[c] += internal[i];
+  }
+  return force;
+}
+
+Tensor<1, 3> QuasiStaticSolver::displacement_at(const Point<3>& point) const {
+  Vector<double> value(3);
+  VectorTools::point_value(*impl_->mapping, impl_->dof, impl_->u, point, value);
+  Tensor<1, 3> t;
+  for (int c = 0; c < 3; ++c) t[c] = value[c];
+  return t;
+}
+
+double QuasiStaticSolver::max_nodal_error(const std::function<Tensor<1, 3>(const Point<3>&)>& exact) const {
+  std::map<types::global_dof_index, Point<3>> points;
+  DoFTools::map_dofs_to_support_points(*impl_->mapping, impl_->dof, points);
+  double worst = 0;
+  // The component of each dof, from the cells (whatever the numbering).
+  std::vector<int> component(impl_->dof.n_dofs(), -1);
+  std::vector<types::global_dof_index> indices(impl_->fe->n_dofs_per_cell());
+  for (const auto& cell : impl_->dof.active_cell_iterators()) {
+    cell->get_dof_indices(indices);
+    for (unsigned int i = 0; i < indices.size(); ++i) component[indices[i]] = impl_->fe->system_to_component_index(i).first;
+  }
+  for (const auto& [index, point] : points) worst = std::max(worst, std::abs(impl_->u[index] - exact(point)[component[index]]));
+  return worst;
+}
+
+}  // namespace fetouch::fem

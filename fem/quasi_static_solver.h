@@ -1,0 +1,85 @@
+// A quasi-static hyperelastic solve in total Lagrangian form: find the displacement u with
+//   R(u) = int_Omega P(I + grad u) : grad v dV - int_Gamma_t t . v dA = 0   for all admissible v,
+// prescribed displacements on named boundary regions (per component) and dead-load tractions on
+// others, the load applied in steps lambda = 1/n, 2/n, ..., 1.
+//
+// Newton's method with the consistent tangent K = int grad v : A : grad du dV (material.h), a
+// backtracking line search on the residual norm, and automatic load-step cutting: a step whose
+// Newton fails (no convergence, or J <= 0 at a quadrature point, i.e. an inverted element) is rolled
+// back to the last converged state and retried with half the increment, down to a minimum.
+// Linear systems: PETSc's MUMPS (Cholesky-type symmetric factorisation) through deal.II.
+//
+// Elements: P1/P2 on tetrahedra, Q1/Q2 on hexahedra, chosen from the triangulation's cells and the
+// degree. One MPI rank for now (PETSc objects on MPI_COMM_SELF; MPI must be initialised, e.g. by
+// dealii::Utilities::MPI::MPI_InitFinalize in main); the MPI-parallel version reshapes this class.
+#pragma once
+
+#include <deal.II/base/tensor.h>
+#include <deal.II/grid/tria.h>
+
+#include <array>
+#include <functional>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "fem/material.h"
+
+namespace fetouch::fem {
+
+struct NewtonSettings {
+  double relative_tolerance = 1e-8;  // on the residual norm, against the step's first residual
+  double absolute_tolerance = 1e-12; // N
+  int max_iterations = 25;
+  int load_steps = 1;
+  int max_cuts = 8;                  // a step can be halved this many times
+};
+
+struct StepReport {
+  double load_factor = 0;
+  int iterations = 0;
+  std::vector<double> residuals;  // per Newton iteration
+  bool converged = false;
+  std::string failure;            // why not, empty if converged
+};
+
+struct SolveReport {
+  bool converged = false;
+  int total_iterations = 0;
+  int cuts = 0;
+  std::vector<StepReport> steps;  // every attempt, the failed ones included
+  std::string failure;
+};
+
+class QuasiStaticSolver {
+ public:
+  QuasiStaticSolver(const dealii::Triangulation<3>& triangulation, const Material& material, int degree);
+  ~QuasiStaticSolver();
+
+  // u = value (at load factor 1) on the components selected by `components`, on a boundary region.
+  void prescribe_displacement(unsigned int boundary_id, std::array<bool, 3> components,
+                              const dealii::Tensor<1, 3>& value);
+  // The same with a displacement field g(x) (at load factor 1).
+  void prescribe_displacement(unsigned int boundary_id, std::array<bool, 3> components,
+                              std::function<dealii::Tensor<1, 3>(const dealii::Point<3>&)> field);
+  // A dead-load traction (force per reference area, N/m^2) on a boundary region.
+  void apply_traction(unsigned int boundary_id, const dealii::Tensor<1, 3>& traction);
+
+  SolveReport solve(const NewtonSettings& settings);
+
+  // The force the body exerts on the supports of a boundary region (the reaction is its opposite):
+  // the internal force vector summed over the region's degrees of freedom, per component.
+  dealii::Tensor<1, 3> boundary_force(unsigned int boundary_id) const;
+  // u at a point (found by search; throws if outside the mesh).
+  dealii::Tensor<1, 3> displacement_at(const dealii::Point<3>& point) const;
+  // Largest |u(x) - g(x)| over the mesh's support points, g given per support point.
+  double max_nodal_error(const std::function<dealii::Tensor<1, 3>(const dealii::Point<3>&)>& exact) const;
+
+  unsigned int dofs() const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace fetouch::fem
