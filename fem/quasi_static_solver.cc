@@ -65,6 +65,7 @@ struct QuasiStaticSolver::Impl {
   };
   std::vector<Prescribed> prescribed;
   std::vector<Traction> tractions;
+  std::function<Tensor<1, 3>(const Point<3>&)> body_force;
 
   Impl(const Triangulation<3>& t, const Material& m, int degree) : tria(t), material(m), dof(t) {
     if (degree < 1 || degree > 2) throw std::invalid_argument("element degree must be 1 or 2");
@@ -112,7 +113,9 @@ struct QuasiStaticSolver::Impl {
   // `internal`, if given, receives f_int without constraints (for reactions). False if J <= 0.
   bool assemble(double lambda, Vector<double>& r, bool tangent, Vector<double>* internal = nullptr) {
     const FEValuesExtractors::Vector displacement(0);
-    FEValues<3> values(*mapping, *fe, *quadrature, update_gradients | update_JxW_values);
+    FEValues<3> values(*mapping, *fe, *quadrature,
+                       update_gradients | update_JxW_values | (body_force ? update_values | update_quadrature_points
+                                                                           : update_default));
     FEFaceValues<3> face_values(*mapping, *fe, *face_quadrature, update_values | update_JxW_values);
     const unsigned int n = fe->n_dofs_per_cell(), nq = quadrature->size();
     FullMatrix<double> cell_matrix(n, n);
@@ -155,6 +158,12 @@ struct QuasiStaticSolver::Impl {
         }
       }
       for (unsigned int i = 0; i < n; ++i) cell_rhs(i) = -cell_internal(i);
+      if (body_force)
+        for (unsigned int q = 0; q < nq; ++q) {
+          const Tensor<1, 3> b = lambda * body_force(values.quadrature_point(q));
+          for (unsigned int i = 0; i < n; ++i)
+            cell_rhs(i) += b[component[i]] * values.shape_value_component(i, q, component[i]) * values.JxW(q);
+        }
       for (const unsigned int f : cell->face_indices()) {
         if (!cell->face(f)->at_boundary()) continue;
         for (const Traction& t : tractions) {
@@ -258,6 +267,23 @@ void QuasiStaticSolver::apply_traction(unsigned int boundary_id, const Tensor<1,
 }
 
 unsigned int QuasiStaticSolver::dofs() const { return impl_->dof.n_dofs(); }
+
+void QuasiStaticSolver::apply_body_force(std::function<Tensor<1, 3>(const Point<3>&)> force) {
+  impl_->body_force = std::move(force);
+}
+
+double QuasiStaticSolver::l2_error(const std::function<Tensor<1, 3>(const Point<3>&)>& exact) const {
+  const Impl::ScaledField field(exact, 1.0);
+  Vector<float> per_cell(impl_->tria.n_active_cells());
+  const unsigned int order = impl_->fe->degree + 2;
+  std::unique_ptr<Quadrature<3>> q;
+  if (impl_->simplex)
+    q = std::make_unique<QGaussSimplex<3>>(order);
+  else
+    q = std::make_unique<QGauss<3>>(order);
+  VectorTools::integrate_difference(*impl_->mapping, impl_->dof, impl_->u, field, per_cell, *q, VectorTools::L2_norm);
+  return VectorTools::compute_global_error(impl_->tria, per_cell, VectorTools::L2_norm);
+}
 
 SolveReport QuasiStaticSolver::solve(const NewtonSettings& s) {
   impl_->setup_constraints();

@@ -65,6 +65,9 @@ class QuasiStaticSolver {
   // A dead-load traction (force per reference area, N/m^2) on a boundary region.
   void apply_traction(unsigned int boundary_id, const dealii::Tensor<1, 3>& traction);
 
+  // A body force per reference volume (N/m^3) as a field, scaled by the load factor.
+  void apply_body_force(std::function<dealii::Tensor<1, 3>(const dealii::Point<3>&)> force);
+
   SolveReport solve(const NewtonSettings& settings);
 
   // The force the body exerts on the supports of a boundary region (the reaction is its opposite):
@@ -74,6 +77,9 @@ class QuasiStaticSolver {
   dealii::Tensor<1, 3> displacement_at(const dealii::Point<3>& point) const;
   // Largest |u(x) - g(x)| over the mesh's support points, g given per support point.
   double max_nodal_error(const std::function<dealii::Tensor<1, 3>(const dealii::Point<3>&)>& exact) const;
+
+  // The L2 norm of u - exact over the body (Gauss quadrature two orders above the element's).
+  double l2_error(const std::function<dealii::Tensor<1, 3>(const dealii::Point<3>&)>& exact) const;
 
   unsigned int dofs() const;
 

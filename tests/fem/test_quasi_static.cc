@@ -147,3 +147,59 @@ TEST(QuasiStatic, UniaxialStretchMatchesTheClosedForms) {
 
 }  // namespace
 }  // namespace fetouch::fem
+
+namespace fetouch::fem {
+namespace {
+
+// Manufactured solution for linear elasticity on the unit cube: u = a s(x), s = sin(pi x) sin(pi y)
+// sin(pi z) (zero on the boundary), body force f = -div sigma = 3 pi^2 mu a s - (lambda + mu)
+// grad(div u), with d_i d_j s = pi^2 cos(pi x_i) cos(pi x_j) sin(pi x_k) (i != j), -pi^2 s (i = j).
+// The L2 error must fall as h^(p+1): slope 2 for P1/Q1, 3 for P2/Q2, within 0.2, fitted on the
+// two finest of three meshes (the coarsest is pre-asymptotic for P1).
+TEST(QuasiStatic, ManufacturedSolutionConvergesAtTheOptimalOrder) {
+  const double mu = lame_mu(5000, 0.3), lambda = lame_lambda(5000, 0.3), pi = M_PI;
+  const Tensor<1, 3> a = [] {
+    Tensor<1, 3> t;
+    t[0] = 1e-3, t[1] = 2e-3, t[2] = -1.5e-3;
+    return t;
+  }();
+  const auto exact = [&](const Point<3>& x) {
+    return Tensor<1, 3>(a * (std::sin(pi * x[0]) * std::sin(pi * x[1]) * std::sin(pi * x[2])));
+  };
+  const auto body_force = [&](const Point<3>& x) {
+    double s[3], c[3];
+    for (int d = 0; d < 3; ++d) s[d] = std::sin(pi * x[d]), c[d] = std::cos(pi * x[d]);
+    const double product = s[0] * s[1] * s[2];
+    Tensor<1, 3> f;
+    for (int i = 0; i < 3; ++i) {
+      double grad_div = 0;
+      for (int j = 0; j < 3; ++j) {
+        const int k = 3 - i - j;
+        grad_div += a[j] * (i == j ? -pi * pi * product : pi * pi * c[i] * c[j] * s[k]);
+      }
+      f[i] = 3 * pi * pi * mu * a[i] * product - (lambda + mu) * grad_div;
+    }
+    return f;
+  };
+  const LinearElastic material(lambda, mu);
+  for (const Element& e : kElements) {
+    std::vector<double> h, error;
+    for (unsigned int n : {2u, 4u, 8u}) {
+      dealii::Triangulation<3> tria;
+      make_box(tria, e.simplex, n, Point<3>(1, 1, 1));
+      QuasiStaticSolver solver(tria, material, e.degree);
+      for (unsigned int b = 0; b < 6; ++b) solver.prescribe_displacement(b, {true, true, true}, Tensor<1, 3>());
+      solver.apply_body_force(body_force);
+      ASSERT_TRUE(solver.solve({}).converged);
+      h.push_back(1.0 / n);
+      error.push_back(solver.l2_error(exact));
+    }
+    const double slope = std::log(error[1] / error[2]) / std::log(h[1] / h[2]);
+    std::printf("%s: L2 errors %.3e %.3e %.3e at h = 1/2, 1/4, 1/8; fitted order %.2f\n", e.name, error[0], error[1],
+                error[2], slope);
+    EXPECT_NEAR(slope, e.degree + 1, 0.2) << e.name;
+  }
+}
+
+}  // namespace
+}  // namespace fetouch::fem
