@@ -21,6 +21,8 @@
 #include <deal.II/lac/vector.h>
 #include <deal.II/numerics/vector_tools.h>
 
+#include <petscksp.h>
+
 #include <cmath>
 #include <map>
 #include <stdexcept>
@@ -28,6 +30,41 @@
 namespace fetouch::fem {
 
 using namespace dealii;
+
+namespace {
+
+// PETSc's MUMPS Cholesky factorisation, kept for several right-hand sides (the Newton step, then
+// the 3m compliance columns, reuse one factorisation).
+class CholeskySolver {
+ public:
+  ~CholeskySolver() { reset(); }
+  void factor(const PETScWrappers::MatrixBase& matrix, MPI_Comm comm) {
+    reset();
+    check(KSPCreate(comm, &ksp_));
+    check(KSPSetOperators(ksp_, static_cast<Mat>(matrix), static_cast<Mat>(matrix)));
+    check(KSPSetType(ksp_, KSPPREONLY));
+    PC pc;
+    check(KSPGetPC(ksp_, &pc));
+    check(PCSetType(pc, PCCHOLESKY));
+    check(PCFactorSetMatSolverType(pc, MATSOLVERMUMPS));
+    check(KSPSetUp(ksp_));
+  }
+  void solve(const PETScWrappers::MPI::Vector& b, PETScWrappers::MPI::Vector& x) {
+    check(KSPSolve(ksp_, static_cast<const Vec&>(b), static_cast<const Vec&>(x)));
+  }
+
+ private:
+  static void check(PetscErrorCode code) {
+    if (code != 0) throw std::runtime_error("PETSc error " + std::to_string(code) + " in the direct solver");
+  }
+  void reset() {
+    if (ksp_) KSPDestroy(&ksp_);
+    ksp_ = nullptr;
+  }
+  KSP ksp_ = nullptr;
+};
+
+}  // namespace
 
 struct QuasiStaticSolver::Impl {
   const Triangulation<3>& tria;
@@ -66,6 +103,14 @@ struct QuasiStaticSolver::Impl {
   std::vector<Prescribed> prescribed;
   std::vector<Traction> tractions;
   std::function<Tensor<1, 3>(const Point<3>&)> body_force;
+  struct Patch {
+    Point<3> center;
+    double radius;
+    std::array<Vector<double>, 3> h;  // H rows, one per component
+    Tensor<1, 3> force;
+  };
+  std::vector<Patch> patches;
+  CholeskySolver direct;
 
   Impl(const Triangulation<3>& t, const Material& m, int degree) : tria(t), material(m), dof(t) {
     if (degree < 1 || degree > 2) throw std::invalid_argument("element degree must be 1 or 2");
@@ -183,7 +228,40 @@ struct QuasiStaticSolver::Impl {
         constraints.distribute_local_to_global(cell_rhs, indices, r);
     }
     if (tangent) matrix.compress(VectorOperation::add);
+    for (const Patch& p : patches)
+      for (int c = 0; c < 3; ++c)
+        if (p.force[c] != 0) r.add(lambda * p.force[c], p.h[c]);
+    constraints.set_zero(r);
     return true;
+  }
+
+  void build_patch(Patch& p) {
+    FEFaceValues<3> face_values(*mapping, *fe, *face_quadrature, update_values | update_JxW_values | update_quadrature_points);
+    const unsigned int n = fe->n_dofs_per_cell();
+    std::vector<types::global_dof_index> indices(n);
+    for (Vector<double>& row : p.h) row.reinit(dof.n_dofs());
+    double total = 0;
+    for (const auto& cell : dof.active_cell_iterators())
+      for (const unsigned int f : cell->face_indices()) {
+        if (!cell->face(f)->at_boundary()) continue;
+        // Skip faces that are entirely out of reach (a cheap bound through the face's diameter).
+        if (cell->face(f)->center().distance(p.center) > p.radius + cell->face(f)->diameter()) continue;
+        face_values.reinit(cell, f);
+        cell->get_dof_indices(indices);
+        for (unsigned int q = 0; q < face_quadrature->size(); ++q) {
+          const double d = face_values.quadrature_point(q).distance(p.center) / p.radius;
+          if (d >= 1) continue;
+          const double w = (1 - d * d) * (1 - d * d) * face_values.JxW(q);
+          total += w;
+          for (unsigned int i = 0; i < n; ++i) {
+            const unsigned int c = fe->system_to_component_index(i).first;
+            p.h[c][indices[i]] += w * face_values.shape_value_component(i, q, c);
+          }
+        }
+      }
+    if (!(total > 0))
+      throw std::invalid_argument("contact patch: no boundary surface within the radius of its centre");
+    for (Vector<double>& row : p.h) row /= total;
   }
 
   void solve_linear(const Vector<double>& rhs, Vector<double>& du) {
@@ -191,10 +269,8 @@ struct QuasiStaticSolver::Impl {
     PETScWrappers::MPI::Vector b(owned, MPI_COMM_SELF), x(owned, MPI_COMM_SELF);
     for (types::global_dof_index i = 0; i < rhs.size(); ++i) b[i] = rhs[i];
     b.compress(VectorOperation::insert);
-    SolverControl control(1, 0);
-    PETScWrappers::SparseDirectMUMPS mumps(control, MPI_COMM_SELF);
-    mumps.set_symmetric_mode(true);
-    mumps.solve(matrix, x, b);
+    direct.factor(matrix, MPI_COMM_SELF);
+    direct.solve(b, x);
     du.reinit(rhs.size());
     for (types::global_dof_index i = 0; i < rhs.size(); ++i) du[i] = x[i];
     constraints.distribute(du);
@@ -267,6 +343,49 @@ void QuasiStaticSolver::apply_traction(unsigned int boundary_id, const Tensor<1,
 }
 
 unsigned int QuasiStaticSolver::dofs() const { return impl_->dof.n_dofs(); }
+
+int QuasiStaticSolver::add_contact_patch(const Point<3>& center, double radius) {
+  if (!(radius > 0)) throw std::invalid_argument("contact patch: the radius must be positive");
+  Impl::Patch patch{center, radius, {}, Tensor<1, 3>()};
+  impl_->build_patch(patch);
+  impl_->patches.push_back(std::move(patch));
+  return static_cast<int>(impl_->patches.size()) - 1;
+}
+
+void QuasiStaticSolver::set_patch_force(int patch, const Tensor<1, 3>& force) { impl_->patches.at(patch).force = force; }
+
+Tensor<1, 3> QuasiStaticSolver::patch_displacement(int patch) const {
+  const auto& p = impl_->patches.at(patch);
+  Tensor<1, 3> d;
+  for (int c = 0; c < 3; ++c) d[c] = p.h[c] * impl_->u;
+  return d;
+}
+
+FullMatrix<double> QuasiStaticSolver::compliance() {
+  Impl& m = *impl_;
+  if (m.matrix.m() == 0) m.setup_constraints();
+  Vector<double> r(m.dof.n_dofs());
+  if (!m.assemble(1.0, r, /*tangent=*/true)) throw std::runtime_error("compliance: an element is inverted");
+  m.direct.factor(m.matrix, MPI_COMM_SELF);
+  const unsigned int columns = 3 * m.patches.size();
+  const IndexSet owned = complete_index_set(m.dof.n_dofs());
+  std::vector<Vector<double>> solutions(columns);
+  for (unsigned int k = 0; k < columns; ++k) {
+    Vector<double> rhs = m.patches[k / 3].h[k % 3];
+    m.constraints.set_zero(rhs);
+    PETScWrappers::MPI::Vector b(owned, MPI_COMM_SELF), x(owned, MPI_COMM_SELF);
+    for (types::global_dof_index i = 0; i < rhs.size(); ++i) b[i] = rhs[i];
+    b.compress(VectorOperation::insert);
+    m.direct.solve(b, x);
+    solutions[k].reinit(rhs.size());
+    for (types::global_dof_index i = 0; i < rhs.size(); ++i) solutions[k][i] = x[i];
+    m.constraints.distribute(solutions[k]);
+  }
+  FullMatrix<double> w(columns, columns);
+  for (unsigned int a = 0; a < columns; ++a)
+    for (unsigned int b = 0; b < columns; ++b) w(a, b) = m.patches[a / 3].h[a % 3] * solutions[b];
+  return w;
+}
 
 void QuasiStaticSolver::apply_body_force(std::function<Tensor<1, 3>(const Point<3>&)> force) {
   impl_->body_force = std::move(force);

@@ -16,6 +16,7 @@
 
 #include <deal.II/base/tensor.h>
 #include <deal.II/grid/tria.h>
+#include <deal.II/lac/full_matrix.h>
 
 #include <array>
 #include <functional>
@@ -69,6 +70,18 @@ class QuasiStaticSolver {
   void apply_body_force(std::function<dealii::Tensor<1, 3>(const dealii::Point<3>&)> force);
 
   SolveReport solve(const NewtonSettings& settings);
+
+  // Contact patches (ARCHITECTURE.md section 4): a probe acts on the surface through a smooth kernel
+  // w(X) = (1 - (d/r)^2)^2 for reference distances d < r from the patch centre, normalised to unit
+  // integral over the boundary. H_a u = int w_a u dA is the patch's displacement; a patch force F_a
+  // is the traction w_a F_a, i.e. the load vector H_a' F_a. Returns the patch's index.
+  int add_contact_patch(const dealii::Point<3>& center, double radius);
+  void set_patch_force(int patch, const dealii::Tensor<1, 3>& force);  // scaled by the load factor
+  dealii::Tensor<1, 3> patch_displacement(int patch) const;
+  // The condensed compliance at the current state: W = H K^-1 H' (3m x 3m, m/N; row/column 3a + c
+  // is patch a, component c), K the consistent tangent with the supports. One factorisation, 3m
+  // solves. Symmetric positive definite when the body is supported.
+  dealii::FullMatrix<double> compliance();
 
   // The force the body exerts on the supports of a boundary region (the reaction is its opposite):
   // the internal force vector summed over the region's degrees of freedom, per component.

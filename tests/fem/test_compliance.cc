@@ -1,0 +1,127 @@
+// The condensed compliance W = H K^-1 H' of contact patches against finite differences of the
+// nonlinear solve, and its structure: symmetric, positive definite, coupled for nearby probes with
+// a coupling that decays with distance.
+#include <gtest/gtest.h>
+
+#include <deal.II/grid/grid_generator.h>
+#include <deal.II/grid/tria.h>
+#include <deal.II/lac/lapack_full_matrix.h>
+
+#include <array>
+#include <cmath>
+#include <cstdio>
+
+#include "fem/material.h"
+#include "fem/quasi_static_solver.h"
+
+namespace fetouch::fem {
+namespace {
+
+using dealii::Point;
+using dealii::Tensor;
+
+// A 10 x 8 x 5 cm block of soft tissue on a table (bottom fixed), P2 tetrahedra.
+void make_block(dealii::Triangulation<3>& tria) {
+  dealii::GridGenerator::subdivided_hyper_rectangle_with_simplices(tria, {6, 5, 3}, Point<3>(0, 0, 0),
+                                                                   Point<3>(0.1, 0.08, 0.05));
+  for (const auto& cell : tria.active_cell_iterators())
+    for (const unsigned int f : cell->face_indices())
+      if (cell->face(f)->at_boundary() && std::abs(cell->face(f)->center()[2]) < 1e-12) cell->face(f)->set_boundary_id(4);
+      else if (cell->face(f)->at_boundary()) cell->face(f)->set_boundary_id(1);
+}
+
+Tensor<1, 3> press(double newton) {
+  Tensor<1, 3> f;
+  f[2] = -newton;
+  return f;
+}
+
+NewtonSettings tight() {
+  NewtonSettings s;
+  s.relative_tolerance = 1e-14;
+  s.absolute_tolerance = 1e-14;
+  s.load_steps = 2;
+  return s;
+}
+
+// Two probes 3 cm apart pressing 0.3 N each into neo-Hookean tissue (E = 5 kPa): W from the
+// tangent equals the central finite difference of the patch displacements under +-1e-4 N on each
+// patch force component, re-solved with Newton from the pressed state.
+TEST(Compliance, MatchesFiniteDifferencesOfTheNonlinearSolve) {
+  dealii::Triangulation<3> tria;
+  make_block(tria);
+  const NeoHookean material(lame_lambda(5000, 0.45), lame_mu(5000, 0.45));
+  QuasiStaticSolver solver(tria, material, 2);
+  solver.prescribe_displacement(4, {true, true, true}, Tensor<1, 3>());
+  const int a = solver.add_contact_patch(Point<3>(0.035, 0.04, 0.05), 0.012);
+  const int b = solver.add_contact_patch(Point<3>(0.065, 0.04, 0.05), 0.012);
+  solver.set_patch_force(a, press(0.3));
+  solver.set_patch_force(b, press(0.3));
+  ASSERT_TRUE(solver.solve(tight()).converged);
+  const dealii::FullMatrix<double> w = solver.compliance();
+  ASSERT_EQ(w.m(), 6u);
+  std::printf("indentation under 0.3 N: %.3f mm; W_zz = %.4g m/N, coupling W_z1z2 = %.4g m/N\n",
+              -1e3 * solver.patch_displacement(a)[2], w(2, 2), w(2, 5));
+  EXPECT_GT(-solver.patch_displacement(a)[2], 1e-3);  // a real, nonlinear indentation (> 1 mm)
+
+  const double delta = 1e-4;
+  NewtonSettings settings = tight();
+  settings.load_steps = 1;
+  const auto both = [&] {
+    const Tensor<1, 3> da = solver.patch_displacement(a), db = solver.patch_displacement(b);
+    return std::array<double, 6>{da[0], da[1], da[2], db[0], db[1], db[2]};
+  };
+  double largest_error = 0;
+  for (int column = 0; column < 6; ++column) {
+    const int patch = column / 3;
+    std::array<double, 6> plus, minus;
+    for (int side = 0; side < 2; ++side) {
+      Tensor<1, 3> force = press(0.3);
+      force[column % 3] += side == 0 ? delta : -delta;
+      solver.set_patch_force(patch, force);
+      ASSERT_TRUE(solver.solve(settings).converged);
+      (side == 0 ? plus : minus) = both();
+    }
+    solver.set_patch_force(patch, press(0.3));
+    for (int row = 0; row < 6; ++row) {
+      const double fd = (plus[row] - minus[row]) / (2 * delta);
+      // Central differences: O(delta^2) truncation; round-off ~1e-15 m / 1e-4 N = 1e-11 m/N.
+      EXPECT_NEAR(w(row, column), fd, 1e-4 * std::abs(w(2, 2))) << row << "," << column;
+      largest_error = std::max(largest_error, std::abs(w(row, column) - fd) / std::abs(w(2, 2)));
+    }
+  }
+  std::printf("largest |W - finite difference| / W_zz = %.2e\n", largest_error);
+}
+
+// W is symmetric and positive definite, and the block coupling two probes is non-zero and decays as
+// they move apart (unloaded tissue, so W is the linearised compliance at rest).
+TEST(Compliance, SymmetricPositiveDefiniteAndCouplingDecaysWithDistance) {
+  const NeoHookean material(lame_lambda(5000, 0.45), lame_mu(5000, 0.45));
+  double previous = 1e300;
+  for (double distance : {0.025, 0.045, 0.065}) {
+    dealii::Triangulation<3> tria;
+    make_block(tria);
+    QuasiStaticSolver solver(tria, material, 2);
+    solver.prescribe_displacement(4, {true, true, true}, Tensor<1, 3>());
+    solver.add_contact_patch(Point<3>(0.05 - distance / 2, 0.04, 0.05), 0.01);
+    solver.add_contact_patch(Point<3>(0.05 + distance / 2, 0.04, 0.05), 0.01);
+    ASSERT_TRUE(solver.solve({}).converged);
+    const dealii::FullMatrix<double> w = solver.compliance();
+    double asymmetry = 0;
+    for (unsigned int i = 0; i < 6; ++i)
+      for (unsigned int j = 0; j < 6; ++j) asymmetry = std::max(asymmetry, std::abs(w(i, j) - w(j, i)));
+    EXPECT_LT(asymmetry, 1e-10 * w.frobenius_norm());
+    dealii::LAPACKFullMatrix<double> lapack(6, 6);
+    lapack = w;
+    lapack.compute_eigenvalues();
+    for (unsigned int i = 0; i < 6; ++i) EXPECT_GT(lapack.eigenvalue(i).real(), 0) << distance;
+    const double coupling = std::abs(w(2, 5));  // normal-normal coupling between the probes
+    std::printf("probes %.0f mm apart: W_zz = %.4g m/N, coupling W_z1z2 = %.4g m/N\n", 1e3 * distance, w(2, 2), coupling);
+    EXPECT_GT(coupling, (distance < 0.03 ? 0.05 : 1e-3) * w(2, 2)) << distance;  // nearby: clearly coupled
+    EXPECT_LT(coupling, previous) << distance;
+    previous = coupling;
+  }
+}
+
+}  // namespace
+}  // namespace fetouch::fem
