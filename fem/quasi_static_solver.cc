@@ -108,7 +108,14 @@ struct QuasiStaticSolver::Impl {
     double radius;
     std::array<Vector<double>, 3> h;  // H rows, one per component
     Tensor<1, 3> force;
+    Tensor<1, 3> converged_force;     // the force of the last converged solve
   };
+  // Loads at factor lambda run from the last converged solve's to the new ones: the static loads
+  // (supports, tractions, body force) from `static_done` (0 before the first solve, 1 after) to
+  // full, patch forces from their converged value to the new one. A solve thus continues from the
+  // previous frame's state and loads (warm start).
+  double static_done = 0;
+  double static_factor(double lambda) const { return static_done + lambda * (1 - static_done); }
   std::vector<Patch> patches;
   CholeskySolver direct;
 
@@ -148,7 +155,7 @@ struct QuasiStaticSolver::Impl {
   void apply_prescribed(double lambda) {
     for (const Prescribed& p : prescribed) {
       std::map<types::global_dof_index, double> values;
-      VectorTools::interpolate_boundary_values(*mapping, dof, p.boundary, ScaledField(p.field, lambda), values,
+      VectorTools::interpolate_boundary_values(*mapping, dof, p.boundary, ScaledField(p.field, static_factor(lambda)), values,
                                                ComponentMask({p.components[0], p.components[1], p.components[2]}));
       for (const auto& [index, value] : values) u[index] = value;
     }
@@ -205,7 +212,7 @@ struct QuasiStaticSolver::Impl {
       for (unsigned int i = 0; i < n; ++i) cell_rhs(i) = -cell_internal(i);
       if (body_force)
         for (unsigned int q = 0; q < nq; ++q) {
-          const Tensor<1, 3> b = lambda * body_force(values.quadrature_point(q));
+          const Tensor<1, 3> b = static_factor(lambda) * body_force(values.quadrature_point(q));
           for (unsigned int i = 0; i < n; ++i)
             cell_rhs(i) += b[component[i]] * values.shape_value_component(i, q, component[i]) * values.JxW(q);
         }
@@ -216,7 +223,7 @@ struct QuasiStaticSolver::Impl {
           face_values.reinit(cell, f);
           for (unsigned int q = 0; q < face_quadrature->size(); ++q)
             for (unsigned int i = 0; i < n; ++i)
-              cell_rhs(i) += lambda * t.value[component[i]] * face_values.shape_value_component(i, q, component[i]) *
+              cell_rhs(i) += static_factor(lambda) * t.value[component[i]] * face_values.shape_value_component(i, q, component[i]) *
                              face_values.JxW(q);
         }
       }
@@ -229,8 +236,10 @@ struct QuasiStaticSolver::Impl {
     }
     if (tangent) matrix.compress(VectorOperation::add);
     for (const Patch& p : patches)
-      for (int c = 0; c < 3; ++c)
-        if (p.force[c] != 0) r.add(lambda * p.force[c], p.h[c]);
+      for (int c = 0; c < 3; ++c) {
+        const double f = p.converged_force[c] + lambda * (p.force[c] - p.converged_force[c]);
+        if (f != 0) r.add(f, p.h[c]);
+      }
     constraints.set_zero(r);
     return true;
   }
@@ -346,7 +355,7 @@ unsigned int QuasiStaticSolver::dofs() const { return impl_->dof.n_dofs(); }
 
 int QuasiStaticSolver::add_contact_patch(const Point<3>& center, double radius) {
   if (!(radius > 0)) throw std::invalid_argument("contact patch: the radius must be positive");
-  Impl::Patch patch{center, radius, {}, Tensor<1, 3>()};
+  Impl::Patch patch{center, radius, {}, Tensor<1, 3>(), Tensor<1, 3>()};
   impl_->build_patch(patch);
   impl_->patches.push_back(std::move(patch));
   return static_cast<int>(impl_->patches.size()) - 1;
@@ -359,6 +368,36 @@ Tensor<1, 3> QuasiStaticSolver::patch_displacement(int patch) const {
   Tensor<1, 3> d;
   for (int c = 0; c < 3; ++c) d[c] = p.h[c] * impl_->u;
   return d;
+}
+
+Point<3> QuasiStaticSolver::patch_center(int patch) const { return impl_->patches.at(patch).center; }
+
+int QuasiStaticSolver::patches() const { return static_cast<int>(impl_->patches.size()); }
+
+Tensor<1, 3> QuasiStaticSolver::patch_normal(int patch) const {
+  const Impl& m = *impl_;
+  const auto& p = m.patches.at(patch);
+  FEFaceValues<3> face_values(*m.mapping, *m.fe, *m.face_quadrature,
+                              update_gradients | update_normal_vectors | update_JxW_values | update_quadrature_points);
+  const FEValuesExtractors::Vector displacement(0);
+  std::vector<Tensor<2, 3>> grad_u(m.face_quadrature->size());
+  Tensor<1, 3> sum;
+  for (const auto& cell : m.dof.active_cell_iterators())
+    for (const unsigned int f : cell->face_indices()) {
+      if (!cell->face(f)->at_boundary()) continue;
+      if (cell->face(f)->center().distance(p.center) > p.radius + cell->face(f)->diameter()) continue;
+      face_values.reinit(cell, f);
+      face_values[displacement].get_function_gradients(m.u, grad_u);
+      for (unsigned int q = 0; q < m.face_quadrature->size(); ++q) {
+        const double d = face_values.quadrature_point(q).distance(p.center) / p.radius;
+        if (d >= 1) continue;
+        Tensor<2, 3> F = grad_u[q];
+        for (int i = 0; i < 3; ++i) F[i][i] += 1;
+        const Tensor<2, 3> cofactor = determinant(F) * transpose(invert(F));
+        sum += (1 - d * d) * (1 - d * d) * face_values.JxW(q) * (cofactor * face_values.normal_vector(q));
+      }
+    }
+  return sum / sum.norm();
 }
 
 FullMatrix<double> QuasiStaticSolver::compliance() {
@@ -406,6 +445,7 @@ double QuasiStaticSolver::l2_error(const std::function<Tensor<1, 3>(const Point<
 
 SolveReport QuasiStaticSolver::solve(const NewtonSettings& s) {
   impl_->setup_constraints();
+  const Vector<double> initial = impl_->u;
   SolveReport report;
   double done = 0, increment = 1.0 / std::max(1, s.load_steps);
   while (done < 1 - 1e-12) {
@@ -419,8 +459,9 @@ SolveReport QuasiStaticSolver::solve(const NewtonSettings& s) {
       done = target;
       continue;
     }
-    impl_->u = last_good;  // roll back
+    impl_->u = last_good;  // roll back the step
     if (++report.cuts > s.max_cuts) {
+      impl_->u = initial;  // and the whole solve: the state stays the last converged one
       report.failure = "load step at factor " + std::to_string(target) + " failed after " + std::to_string(s.max_cuts) +
                        " cuts: " + step.failure;
       return report;
@@ -428,6 +469,8 @@ SolveReport QuasiStaticSolver::solve(const NewtonSettings& s) {
     increment /= 2;
   }
   report.converged = true;
+  impl_->static_done = 1;
+  for (auto& p : impl_->patches) p.converged_force = p.force;
   return report;
 }
 

@@ -3,6 +3,8 @@
 // prescribed displacements on named boundary regions (per component) and dead-load tractions on
 // others, the load applied in steps lambda = 1/n, 2/n, ..., 1.
 //
+// Solves continue: a second solve() starts from the first one's state and moves the loads from
+// their converged values to the new ones (a frame of the haptic loop changes the probe forces).
 // Newton's method with the consistent tangent K = int grad v : A : grad du dV (material.h), a
 // backtracking line search on the residual norm, and automatic load-step cutting: a step whose
 // Newton fails (no convergence, or J <= 0 at a quadrature point, i.e. an inverted element) is rolled
@@ -78,6 +80,11 @@ class QuasiStaticSolver {
   int add_contact_patch(const dealii::Point<3>& center, double radius);
   void set_patch_force(int patch, const dealii::Tensor<1, 3>& force);  // scaled by the load factor
   dealii::Tensor<1, 3> patch_displacement(int patch) const;
+  // The patch centre and its displacement, and the deformed outward normal there: the kernel-
+  // weighted average of the deformed face normals (Nanson: n da = J F^-T N dA), normalised.
+  dealii::Point<3> patch_center(int patch) const;
+  dealii::Tensor<1, 3> patch_normal(int patch) const;
+  int patches() const;
   // The condensed compliance at the current state: W = H K^-1 H' (3m x 3m, m/N; row/column 3a + c
   // is patch a, component c), K the consistent tangent with the supports. One factorisation, 3m
   // solves. Symmetric positive definite when the body is supported.

@@ -1,0 +1,67 @@
+#include "fem/fem_environment.h"
+
+#include <chrono>
+#include <stdexcept>
+
+namespace fetouch::fem {
+
+FemEnvironment::FemEnvironment(std::unique_ptr<QuasiStaticSolver> solver, const NewtonSettings& newton)
+    : solver_(std::move(solver)), newton_(newton) {
+  if (!solver_ || solver_->patches() < 1) throw std::invalid_argument("FemEnvironment: the solver needs a contact patch per contact");
+}
+
+void FemEnvironment::describe(haptics::EnvironmentUpdate& out) {
+  const int m = contacts();
+  out.frames.resize(m);
+  for (int c = 0; c < m; ++c) {
+    const dealii::Point<3> center = solver_->patch_center(c);
+    const dealii::Tensor<1, 3> u = solver_->patch_displacement(c), n = solver_->patch_normal(c);
+    for (int d = 0; d < 3; ++d) {
+      out.frames[c].point(d) = center[d] + u[d];
+      out.frames[c].normal(d) = n[d];
+    }
+    out.frames[c].curvature.setZero();
+  }
+  const dealii::FullMatrix<double> w = solver_->compliance();
+  out.compliance.resize(3 * m, 3 * m);
+  for (int a = 0; a < 3 * m; ++a)
+    for (int b = 0; b < 3 * m; ++b) out.compliance(a, b) = 0.5 * (w(a, b) + w(b, a));  // exact up to round-off
+  out.damping.resize(0, 0);
+}
+
+void FemEnvironment::initial(haptics::EnvironmentUpdate& out) {
+  const SolveReport report = solver_->solve(newton_);
+  if (!report.converged) throw std::runtime_error("FemEnvironment: the unloaded tissue does not solve: " + report.failure);
+  describe(out);
+  out.status = {};
+  out.frame = -1;
+  last_good_ = out;
+}
+
+void FemEnvironment::solve(const std::vector<haptics::ContactSample>& samples, long frame,
+                           haptics::EnvironmentUpdate& out) {
+  const auto start = std::chrono::steady_clock::now();
+  for (int c = 0; c < contacts(); ++c) {
+    dealii::Tensor<1, 3> force;
+    for (int d = 0; d < 3; ++d) force[d] = samples[c].force(d);
+    solver_->set_patch_force(c, force);
+  }
+  const SolveReport report = solver_->solve(newton_);
+  if (report.converged) {
+    describe(out);
+    out.status = {};
+    last_good_ = out;
+  } else {
+    out = last_good_;
+    out.status = {};
+    out.status.converged = false;
+    out.status.message = report.failure;
+  }
+  out.status.iterations = report.total_iterations;
+  if (!report.steps.empty() && !report.steps.back().residuals.empty())
+    out.status.residual = report.steps.back().residuals.back();
+  out.status.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  out.frame = frame;
+}
+
+}  // namespace fetouch::fem

@@ -1,0 +1,38 @@
+// The tissue solver behind the haptic seam (haptics/environment.h): one frame per call, the probes'
+// forces in, the deformed contact frames and the condensed compliance out.
+//
+// Each contact is a patch of the solver (quasi_static_solver.h): the sample's force on the tissue
+// becomes the patch force, Newton solves from the previous frame's state (warm start), and the
+// update carries per contact the deformed patch point (centre + H u), the deformed normal, and
+// W = H K^-1 H' (3m x 3m) at the new state. A failed frame is rolled back by the solver and
+// reported (status.converged = false, why); the update then repeats the last good frames and W, so
+// the haptic side keeps rendering the last good tissue.
+#pragma once
+
+#include <memory>
+
+#include "fem/quasi_static_solver.h"
+#include "haptics/environment.h"
+
+namespace fetouch::fem {
+
+class FemEnvironment final : public haptics::Environment {
+ public:
+  // `solver` carries the mesh, material, supports and one contact patch per contact, in order.
+  FemEnvironment(std::unique_ptr<QuasiStaticSolver> solver, const NewtonSettings& newton);
+
+  int contacts() const override { return solver_->patches(); }
+  void initial(haptics::EnvironmentUpdate& out) override;
+  void solve(const std::vector<haptics::ContactSample>& samples, long frame, haptics::EnvironmentUpdate& out) override;
+
+  QuasiStaticSolver& solver() { return *solver_; }
+
+ private:
+  void describe(haptics::EnvironmentUpdate& out);
+
+  std::unique_ptr<QuasiStaticSolver> solver_;
+  NewtonSettings newton_;
+  haptics::EnvironmentUpdate last_good_;
+};
+
+}  // namespace fetouch::fem
