@@ -19,11 +19,14 @@
 #include <deal.II/lac/petsc_vector.h>
 #include <deal.II/lac/solver_control.h>
 #include <deal.II/lac/vector.h>
+#include <deal.II/numerics/data_component_interpretation.h>
+#include <deal.II/numerics/data_out.h>
 #include <deal.II/numerics/vector_tools.h>
 
 #include <petscksp.h>
 
 #include <cmath>
+#include <fstream>
 #include <map>
 #include <stdexcept>
 
@@ -228,7 +231,10 @@ struct QuasiStaticSolver::Impl {
         }
       }
       cell->get_dof_indices(indices);
-      if (internal) internal->add(indices, cell_internal);
+      if (internal) {
+        for (unsigned int i = 0; i < n; ++i) cell_internal(i) = -cell_rhs(i);  // f_int - f_ext
+        internal->add(indices, cell_internal);
+      }
       if (tangent)
         constraints.distribute_local_to_global(cell_matrix, cell_rhs, indices, matrix, r);
       else
@@ -238,7 +244,9 @@ struct QuasiStaticSolver::Impl {
     for (const Patch& p : patches)
       for (int c = 0; c < 3; ++c) {
         const double f = p.converged_force[c] + lambda * (p.force[c] - p.converged_force[c]);
-        if (f != 0) r.add(f, p.h[c]);
+        if (f == 0) continue;
+        r.add(f, p.h[c]);
+        if (internal) internal->add(-f, p.h[c]);
       }
     constraints.set_zero(r);
     return true;
@@ -352,6 +360,77 @@ void QuasiStaticSolver::apply_traction(unsigned int boundary_id, const Tensor<1,
 }
 
 unsigned int QuasiStaticSolver::dofs() const { return impl_->dof.n_dofs(); }
+
+unsigned int QuasiStaticSolver::cells() const { return impl_->tria.n_active_cells(); }
+
+QuasiStaticSolver::CellFields QuasiStaticSolver::cell_fields() const {
+  const Impl& m = *impl_;
+  CellFields fields;
+  fields.jacobian.reserve(m.tria.n_active_cells());
+  fields.von_mises.reserve(m.tria.n_active_cells());
+  FEValues<3> values(*m.mapping, *m.fe, *m.quadrature, update_gradients);
+  const FEValuesExtractors::Vector displacement(0);
+  std::vector<Tensor<2, 3>> grad_u(m.quadrature->size());
+  for (const auto& cell : m.dof.active_cell_iterators()) {
+    values.reinit(cell);
+    values[displacement].get_function_gradients(m.u, grad_u);
+    double j_sum = 0, vm_sum = 0;
+    for (const auto& g : grad_u) {
+      Tensor<2, 3> F = g;
+      for (int i = 0; i < 3; ++i) F[i][i] += 1;
+      const double j = determinant(F);
+      j_sum += j;
+      Tensor2 P;
+      if (j > 0 && m.material.evaluate(F, P, nullptr)) {
+        const Tensor<2, 3> sigma = P * transpose(F) / j;  // Cauchy
+        const Tensor<2, 3> dev = sigma - trace(sigma) / 3 * unit_symmetric_tensor<3>();
+        vm_sum += std::sqrt(1.5 * scalar_product(dev, dev));
+      }
+    }
+    fields.jacobian.push_back(j_sum / grad_u.size());
+    fields.von_mises.push_back(vm_sum / grad_u.size());
+  }
+  return fields;
+}
+
+double QuasiStaticSolver::max_displacement() const {
+  const Impl& m = *impl_;
+  std::vector<types::global_dof_index> indices(m.fe->n_dofs_per_cell());
+  double worst = 0;
+  for (const auto& cell : m.dof.active_cell_iterators()) {
+    cell->get_dof_indices(indices);
+    for (unsigned int node = 0; node < indices.size(); ++node) {
+      if (m.fe->system_to_component_index(node).first != 0) continue;
+      // The three components of this support point are the dofs with the same base index.
+      Tensor<1, 3> u;
+      for (unsigned int other = 0; other < indices.size(); ++other)
+        if (m.fe->system_to_component_index(other).second == m.fe->system_to_component_index(node).second)
+          u[m.fe->system_to_component_index(other).first] = m.u[indices[other]];
+      worst = std::max(worst, u.norm());
+    }
+  }
+  return worst;
+}
+
+void QuasiStaticSolver::write_vtu(const std::string& path) const {
+  const Impl& m = *impl_;
+  DataOut<3> out;
+  out.attach_dof_handler(m.dof);
+  const std::vector<std::string> names(3, "displacement");
+  const std::vector<DataComponentInterpretation::DataComponentInterpretation> kinds(
+      3, DataComponentInterpretation::component_is_part_of_vector);
+  out.add_data_vector(m.u, names, DataOut<3>::type_dof_data, kinds);
+  const CellFields fields = cell_fields();
+  Vector<double> jacobian(fields.jacobian.begin(), fields.jacobian.end());
+  Vector<double> von_mises(fields.von_mises.begin(), fields.von_mises.end());
+  out.add_data_vector(jacobian, "J", DataOut<3>::type_cell_data);
+  out.add_data_vector(von_mises, "von_mises_stress_pa", DataOut<3>::type_cell_data);
+  out.build_patches(*m.mapping, m.fe->degree);
+  std::ofstream file(path);
+  if (!file) throw std::runtime_error("cannot write " + path);
+  out.write_vtu(file);
+  if (!file) throw std::runtime_error("cannot write " + path);
+}
 
 int QuasiStaticSolver::add_contact_patch(const Point<3>& center, double radius) {
   if (!(radius > 0)) throw std::invalid_argument("contact patch: the radius must be positive");

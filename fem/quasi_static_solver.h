@@ -90,8 +90,9 @@ class QuasiStaticSolver {
   // solves. Symmetric positive definite when the body is supported.
   dealii::FullMatrix<double> compliance();
 
-  // The force the body exerts on the supports of a boundary region (the reaction is its opposite):
-  // the internal force vector summed over the region's degrees of freedom, per component.
+  // The reaction of a boundary region: the force its supports exert on the body, i.e. internal
+  // minus external nodal forces summed over the region's degrees of freedom, per component (at
+  // equilibrium that sum vanishes on free degrees of freedom).
   dealii::Tensor<1, 3> boundary_force(unsigned int boundary_id) const;
   // u at a point (found by search; throws if outside the mesh).
   dealii::Tensor<1, 3> displacement_at(const dealii::Point<3>& point) const;
@@ -102,6 +103,19 @@ class QuasiStaticSolver {
   double l2_error(const std::function<dealii::Tensor<1, 3>(const dealii::Point<3>&)>& exact) const;
 
   unsigned int dofs() const;
+  unsigned int cells() const;
+
+  // Per-cell figures of the current state (averages over the cell's quadrature points).
+  struct CellFields {
+    std::vector<double> jacobian;   // J = det F
+    std::vector<double> von_mises;  // of the Cauchy stress, Pa
+  };
+  CellFields cell_fields() const;
+  double max_displacement() const;  // largest nodal |u|, m
+
+  // The deformed state for ParaView: a VTU with the displacement (warp by vector to see the
+  // deformation), J and the von Mises stress per cell. Throws std::runtime_error if unwritable.
+  void write_vtu(const std::string& path) const;
 
  private:
   struct Impl;

@@ -1,0 +1,91 @@
+#include "fem/tissue_model.h"
+
+#include <cmath>
+#include <stdexcept>
+
+#include "fem/tissue_mesh_builder.h"
+
+namespace fetouch::fem {
+
+namespace {
+
+bool selects(const config::Selector& s, const dealii::Point<3>& c) {
+  switch (s.kind) {
+    case config::SelectorKind::box:
+      for (int d = 0; d < 3; ++d)
+        if (c[d] < s.box_min[d] - 1e-12 || c[d] > s.box_max[d] + 1e-12) return false;
+      return true;
+    case config::SelectorKind::plane: {
+      const double n = std::sqrt(s.plane_normal[0] * s.plane_normal[0] + s.plane_normal[1] * s.plane_normal[1] +
+                                 s.plane_normal[2] * s.plane_normal[2]);
+      double distance = 0;
+      for (int d = 0; d < 3; ++d) distance += (c[d] - s.plane_point[d]) * s.plane_normal[d] / n;
+      return std::abs(distance) <= s.plane_tolerance_m;
+    }
+    case config::SelectorKind::physical_group: return false;
+  }
+  return false;
+}
+
+}  // namespace
+
+std::unique_ptr<TissueModel> build_tissue_model(const config::Scene& scene) {
+  auto model = std::make_unique<TissueModel>();
+  model->mesh = build_tissue_mesh(scene.mesh, model->triangulation);
+  model->material = make_material(scene.material);
+  model->degree = scene.mesh.element == config::ElementType::p2 || scene.mesh.element == config::ElementType::q2 ? 2 : 1;
+
+  // Boundary ids for box and plane selectors, above every id the mesh uses.
+  unsigned int next_id = 100;
+  for (const auto& [name, id] : model->mesh.boundary_ids) next_id = std::max(next_id, id + 1);
+  for (const config::BoundaryRegion& region : scene.boundary) {
+    unsigned int id;
+    unsigned int faces = 0;
+    if (region.select.kind == config::SelectorKind::physical_group) {
+      const auto found = model->mesh.boundary_ids.find(region.select.physical_group);
+      if (found == model->mesh.boundary_ids.end())
+        throw std::runtime_error("boundary region " + region.name + ": the mesh has no physical group " +
+                                 region.select.physical_group);
+      id = found->second;
+      for (const auto& cell : model->triangulation.active_cell_iterators())
+        for (const unsigned int f : cell->face_indices()) faces += cell->face(f)->at_boundary() && cell->face(f)->boundary_id() == id;
+    } else {
+      id = next_id++;
+      for (const auto& cell : model->triangulation.active_cell_iterators())
+        for (const unsigned int f : cell->face_indices())
+          if (cell->face(f)->at_boundary() && selects(region.select, cell->face(f)->center())) {
+            cell->face(f)->set_boundary_id(id);
+            ++faces;
+          }
+    }
+    if (faces == 0)
+      throw std::runtime_error("boundary region " + region.name + " (line " + std::to_string(region.where.line) +
+                               "): its selector selects no boundary face of the mesh");
+    model->region_ids[region.name] = id;
+    model->region_faces[region.name] = faces;
+  }
+
+  model->solver = std::make_unique<QuasiStaticSolver>(model->triangulation, *model->material, model->degree);
+  for (const config::BoundaryRegion& region : scene.boundary) {
+    const unsigned int id = model->region_ids.at(region.name);
+    if (region.type == config::BoundaryType::fixed) {
+      model->solver->prescribe_displacement(id, {true, true, true}, dealii::Tensor<1, 3>());
+    } else {
+      dealii::Tensor<1, 3> t;
+      for (int d = 0; d < 3; ++d) t[d] = region.traction_pa[d];
+      model->solver->apply_traction(id, t);
+    }
+  }
+  if (scene.effects.has(config::Effect::gravity)) {
+    dealii::Tensor<1, 3> weight;
+    for (int d = 0; d < 3; ++d) weight[d] = scene.material.density_kg_per_m3 * scene.effects.gravity_m_per_s2[d];
+    model->solver->apply_body_force([weight](const dealii::Point<3>&) { return weight; });
+  }
+  model->newton.relative_tolerance = scene.solver.newton_relative_tolerance;
+  model->newton.absolute_tolerance = scene.solver.newton_absolute_tolerance;
+  model->newton.max_iterations = scene.solver.newton_max_iterations;
+  model->newton.max_cuts = scene.solver.max_load_step_cuts;
+  return model;
+}
+
+}  // namespace fetouch::fem

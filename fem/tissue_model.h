@@ -1,0 +1,35 @@
+// A scene's tissue as the solver sees it: the triangulation, the material and a QuasiStaticSolver
+// with the scene's boundary regions (fixed, traction) and effects that apply to a static solve
+// (gravity). Selectors: a physical group names the mesh's own boundary region; a box or a plane
+// selects the boundary faces whose centres lie inside it (they get a boundary id of their own).
+#pragma once
+
+#include <deal.II/grid/tria.h>
+
+#include <map>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "config/scene.h"
+#include "fem/material.h"
+#include "fem/quasi_static_solver.h"
+#include "fem/tissue_mesh.h"
+
+namespace fetouch::fem {
+
+struct TissueModel {
+  dealii::Triangulation<3> triangulation;
+  TissueMeshInfo mesh;
+  std::unique_ptr<Material> material;
+  std::unique_ptr<QuasiStaticSolver> solver;
+  std::map<std::string, unsigned int> region_ids;  // scene boundary region -> boundary id
+  std::map<std::string, unsigned int> region_faces;  // scene boundary region -> faces selected
+  NewtonSettings newton;
+  int degree = 1;
+};
+
+// Throws std::runtime_error naming the region when a selector selects no face.
+std::unique_ptr<TissueModel> build_tissue_model(const config::Scene& scene);
+
+}  // namespace fetouch::fem

@@ -1,0 +1,95 @@
+// `fetouch solve`, the real binary on real scenes, against global equilibrium (the supports' reaction
+// balances every load applied) and with its VTU read back by VTK as ParaView would.
+#include <gtest/gtest.h>
+#include <vtkCellData.h>
+#include <vtkDataArray.h>
+#include <vtkPointData.h>
+#include <vtkSmartPointer.h>
+#include <vtkUnstructuredGrid.h>
+#include <vtkXMLUnstructuredGridReader.h>
+#include <yaml-cpp/yaml.h>
+
+#include <cmath>
+
+#include "tests/support/run_command.h"
+
+namespace fetouch::testing {
+namespace {
+
+namespace fs = std::filesystem;
+
+fs::path scratch(const std::string& name) {
+  const fs::path dir = fs::temp_directory_path() / ("fetouch_solve_" + name + "_" + std::to_string(::getpid()));
+  fs::remove_all(dir);
+  return dir;
+}
+
+// Gravity (rho g V = 1050 x 9.81 x 4e-4 m^3 = 4.1202 N down) and a dead-load traction of 20 Pa on
+// the 0.08 x 0.05 m face x = 0.1 (0.08 N along x): the base must push back exactly that.
+TEST(SolveCommand, SupportReactionBalancesGravityAndTraction) {
+  const fs::path dir = scratch("gravity");
+  const auto r = run_command(fetouch("solve --json --out " + dir.string() + " " + FETOUCH_TEST_DATA_DIR "/data/block_gravity.yaml"));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const YAML::Node j = YAML::Load(r.out);
+  ASSERT_TRUE(j["converged"].as<bool>());
+  const auto base = j["reactions_n"]["base"];
+  const double weight = 1050 * 9.81 * 0.1 * 0.08 * 0.05, pull = 20 * 0.08 * 0.05;
+  EXPECT_NEAR(base[0].as<double>(), -pull, 1e-6 * weight);
+  EXPECT_NEAR(base[1].as<double>(), 0, 1e-6 * weight);
+  EXPECT_NEAR(base[2].as<double>(), weight, 1e-6 * weight);
+  EXPECT_GT(j["min_jacobian"].as<double>(), 0.5);
+  // The summary file says the same as stdout.
+  EXPECT_EQ(YAML::LoadFile((dir / "summary.json").string())["reactions_n"]["base"][2].as<double>(), base[2].as<double>());
+  fs::remove_all(dir);
+}
+
+// A probe pressing 0.3 N into the block of the shipped scene: the table takes 0.3 N, the probe's
+// patch moves down, and the VTU holds the displacement ParaView warps by, with J > 0 everywhere.
+TEST(SolveCommand, PressWritesAVtuThatVtkReadsBack) {
+  const fs::path dir = scratch("press");
+  const auto r = run_command(fetouch("solve --json --out " + dir.string() + " " + FETOUCH_SOURCE_DIR +
+                                     "/config/scenes/block_press.yaml --press 0.05 0.04 0.05 0 0 -0.3 --point 0.05 0.04 0"));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const YAML::Node j = YAML::Load(r.out);
+  EXPECT_NEAR(j["reactions_n"]["table"][2].as<double>(), 0.3, 1e-7);
+  EXPECT_LT(j["probes"][0]["displacement_m"][2].as<double>(), -1e-3);
+  // A point on the fixed base does not move.
+  for (int d = 0; d < 3; ++d) EXPECT_NEAR(j["points"][0]["displacement_m"][d].as<double>(), 0, 1e-12);
+
+  auto reader = vtkSmartPointer<vtkXMLUnstructuredGridReader>::New();
+  reader->SetFileName((dir / "block_press.vtu").c_str());
+  reader->Update();
+  vtkUnstructuredGrid* grid = reader->GetOutput();
+  ASSERT_GT(grid->GetNumberOfPoints(), 0);
+  vtkDataArray* u = grid->GetPointData()->GetArray("displacement");
+  ASSERT_NE(u, nullptr);
+  ASSERT_EQ(u->GetNumberOfComponents(), 3);
+  double largest = 0;
+  for (vtkIdType p = 0; p < u->GetNumberOfTuples(); ++p) {
+    const double* v = u->GetTuple3(p);
+    largest = std::max(largest, std::sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]));
+  }
+  EXPECT_NEAR(largest, j["max_displacement_m"].as<double>(), 1e-9);
+  // deal.II writes per-cell values on its patches' points (constant over each cell).
+  vtkDataArray* jacobian = grid->GetPointData()->GetArray("J");
+  ASSERT_NE(jacobian, nullptr);
+  double range[2];
+  jacobian->GetRange(range);
+  EXPECT_GT(range[0], 0.5);
+  EXPECT_LT(range[1], 1.5);
+  EXPECT_TRUE(fs::exists(dir / "block_press.pvd"));
+  fs::remove_all(dir);
+}
+
+TEST(SolveCommand, BadInputIsRefusedWithAReason) {
+  const std::string scene = std::string(FETOUCH_SOURCE_DIR) + "/config/scenes/block_press.yaml";
+  const auto off = run_command(fetouch("solve --out /tmp/fetouch_off " + scene + " --press 0.5 0.5 0.5 0 0 -1"));
+  EXPECT_EQ(off.exit_code, 2);
+  EXPECT_NE(off.err.find("no boundary surface within the radius"), std::string::npos) << off.err;
+  EXPECT_EQ(run_command(fetouch("solve /no/such/scene.yaml")).exit_code, 2);
+  EXPECT_EQ(run_command(fetouch("solve " + scene + " --press 0.05 0.04")).exit_code, 2);
+  fs::remove_all("/tmp/fetouch_off");
+}
+
+}  // namespace
+}  // namespace fetouch::testing
