@@ -194,7 +194,10 @@ struct QuasiStaticSolver::Impl {
       for (unsigned int q = 0; q < nq; ++q) {
         Tensor2 F = grad_u[q];
         for (int d = 0; d < 3; ++d) F[d][d] += 1;
-        if (!material.evaluate(F, P, tangent ? &A : nullptr)) return false;
+        if (!material.evaluate(F, P, tangent ? &A : nullptr)) {
+          if (tangent) matrix.compress(VectorOperation::add);  // leave PETSc's matrix usable
+          return false;
+        }
         const double jxw = values.JxW(q);
         for (unsigned int i = 0; i < n; ++i) grad_phi[i] = values.shape_grad_component(i, q, component[i]);
         for (unsigned int i = 0; i < n; ++i) {
