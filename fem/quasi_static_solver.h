@@ -52,6 +52,12 @@ struct SolveReport {
   int cuts = 0;
   std::vector<StepReport> steps;  // every attempt, the failed ones included
   std::string failure;
+  // Time per phase, seconds: assembly (residual and tangent), factorisation, triangular solves.
+  double assembly_s = 0, factorisation_s = 0, solve_s = 0;
+};
+
+struct ComplianceTimes {
+  double assembly_s = 0, factorisation_s = 0, solves_s = 0;
 };
 
 class QuasiStaticSolver {
@@ -89,6 +95,7 @@ class QuasiStaticSolver {
   // is patch a, component c), K the consistent tangent with the supports. One factorisation, 3m
   // solves. Symmetric positive definite when the body is supported.
   dealii::FullMatrix<double> compliance();
+  const ComplianceTimes& last_compliance_times() const;
 
   // The reaction of a boundary region: the force its supports exert on the body, i.e. internal
   // minus external nodal forces summed over the region's degrees of freedom, per component (at

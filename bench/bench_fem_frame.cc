@@ -1,0 +1,73 @@
+// One solver frame of the default kind of scene (ARCHITECTURE.md section 7: under 50 ms, i.e. 20 Hz,
+// on 2 cores): a neo-Hookean block fixed at its base, two probes pressing 0.3 N, each frame the
+// forces change by 1 %, Newton (1e-8 relative) continues from the previous frame's state, then the
+// 2-contact condensed compliance (one factorisation, 6 solves). Serial, MUMPS. Counters: dofs.
+//   build/release/bench/bench_fem --benchmark_filter=Frame
+#include <benchmark/benchmark.h>
+#include <deal.II/base/mpi.h>
+#include <deal.II/grid/grid_generator.h>
+#include <deal.II/grid/tria.h>
+
+#include <cmath>
+
+#include "fem/material.h"
+#include "fem/quasi_static_solver.h"
+
+namespace {
+
+using namespace fetouch::fem;
+
+void BM_FemFrame(benchmark::State& state) {
+  const int degree = static_cast<int>(state.range(0));
+  const unsigned int n = static_cast<unsigned int>(state.range(1));
+  dealii::Triangulation<3> tria;
+  dealii::GridGenerator::subdivided_hyper_rectangle_with_simplices(tria, {n + 2, n + 1, n}, dealii::Point<3>(),
+                                                                   dealii::Point<3>(0.1, 0.08, 0.05));
+  for (const auto& cell : tria.active_cell_iterators())
+    for (const unsigned int f : cell->face_indices())
+      if (cell->face(f)->at_boundary()) cell->face(f)->set_boundary_id(std::abs(cell->face(f)->center()[2]) < 1e-12 ? 4 : 1);
+  const NeoHookean material(lame_lambda(5000, 0.45), lame_mu(5000, 0.45));
+  QuasiStaticSolver solver(tria, material, degree);
+  solver.prescribe_displacement(4, {true, true, true}, dealii::Tensor<1, 3>());
+  const int a = solver.add_contact_patch(dealii::Point<3>(0.035, 0.04, 0.05), 0.01);
+  const int b = solver.add_contact_patch(dealii::Point<3>(0.065, 0.04, 0.05), 0.01);
+  dealii::Tensor<1, 3> force;
+  force[2] = -0.3;
+  solver.set_patch_force(a, force);
+  solver.set_patch_force(b, force);
+  solver.solve({});
+  long frame = 0, iterations = 0;
+  double assembly = 0, factorisation = 0, solves = 0;
+  for (auto _ : state) {
+    force[2] = -0.3 * (1 + 0.01 * ((frame++ % 2) ? 1 : -1));
+    solver.set_patch_force(a, force);
+    const SolveReport report = solver.solve({});
+    iterations += report.total_iterations;
+    benchmark::DoNotOptimize(solver.compliance());
+    const ComplianceTimes& c = solver.last_compliance_times();
+    assembly += report.assembly_s + c.assembly_s;
+    factorisation += report.factorisation_s + c.factorisation_s;
+    solves += report.solve_s + c.solves_s;
+  }
+  const double frames = static_cast<double>(std::max(1L, frame));
+  state.counters["dofs"] = solver.dofs();
+  state.counters["newton_per_frame"] = iterations / frames;
+  state.counters["assembly_ms"] = 1e3 * assembly / frames;
+  state.counters["factor_ms"] = 1e3 * factorisation / frames;
+  state.counters["solves_ms"] = 1e3 * solves / frames;
+}
+BENCHMARK(BM_FemFrame)
+    ->ArgNames({"degree", "n"})
+    ->Args({1, 6})->Args({1, 10})->Args({1, 14})->Args({1, 18})
+    ->Args({2, 3})->Args({2, 5})->Args({2, 7})->Args({2, 9})
+    ->Unit(benchmark::kMillisecond);
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  dealii::Utilities::MPI::MPI_InitFinalize mpi(argc, argv, 1);
+  benchmark::Initialize(&argc, argv);
+  benchmark::RunSpecifiedBenchmarks();
+  benchmark::Shutdown();
+  return 0;
+}
