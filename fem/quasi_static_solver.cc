@@ -198,64 +198,57 @@ struct QuasiStaticSolver::Impl {
     return ok;
   }
 
-  bool assemble_impl(double lambda, Vector<double>& r, bool tangent, Vector<double>* internal) {
-    const FEValuesExtractors::Vector displacement(0);
+  // What never changes in a total Lagrangian formulation, computed once: per cell its dof indices,
+  // JxW and the reference gradients of the scalar base functions at each quadrature point, and the
+  // external load vector of the tractions and the body force (at full load).
+  struct Cache {
+    bool built = false;
+    unsigned int n = 0, nq = 0, nbase = 0;
+    std::vector<unsigned int> component, base;  // of each cell dof
+    std::vector<types::global_dof_index> indices;
+    std::vector<double> jxw;
+    std::vector<Tensor<1, 3>> gradients;  // [cell][q][base]
+    Vector<double> external;
+  } cache;
+
+  void build_cache() {
+    Cache& c = cache;
+    c.n = fe->n_dofs_per_cell();
+    c.nq = quadrature->size();
+    c.nbase = fe->base_element(0).n_dofs_per_cell();
+    c.component.resize(c.n);
+    c.base.resize(c.n);
+    for (unsigned int i = 0; i < c.n; ++i) {
+      c.component[i] = fe->system_to_component_index(i).first;
+      c.base[i] = fe->system_to_component_index(i).second;
+    }
+    const unsigned int cells = tria.n_active_cells();
+    c.indices.resize(std::size_t(cells) * c.n);
+    c.jxw.resize(std::size_t(cells) * c.nq);
+    c.gradients.resize(std::size_t(cells) * c.nq * c.nbase);
+    c.external.reinit(dof.n_dofs());
     FEValues<3> values(*mapping, *fe, *quadrature,
-                       update_gradients | update_JxW_values | (body_force ? update_values | update_quadrature_points
-                                                                           : update_default));
+                       update_gradients | update_JxW_values | update_values | update_quadrature_points);
     FEFaceValues<3> face_values(*mapping, *fe, *face_quadrature, update_values | update_JxW_values);
-    const unsigned int n = fe->n_dofs_per_cell(), nq = quadrature->size();
-    FullMatrix<double> cell_matrix(n, n);
-    Vector<double> cell_rhs(n), cell_internal(n);
-    std::vector<types::global_dof_index> indices(n);
-    std::vector<Tensor<2, 3>> grad_u(nq);
-    std::vector<unsigned int> component(n);
-    for (unsigned int i = 0; i < n; ++i) component[i] = fe->system_to_component_index(i).first;
-    std::vector<Tensor<1, 3>> grad_phi(n);
-    std::vector<std::array<Tensor<1, 3>, 3>> a_grad(n);
-    r = 0;
-    if (internal) *internal = 0;
-    if (tangent) matrix = 0;
-    Tensor2 P;
-    Tensor4 A;
+    std::vector<types::global_dof_index> local(c.n);
+    Vector<double> cell_external(c.n);
+    unsigned int k = 0;
     for (const auto& cell : dof.active_cell_iterators()) {
       values.reinit(cell);
-      cell_matrix = 0;
-      cell_rhs = 0;
-      cell_internal = 0;
-      values[displacement].get_function_gradients(u, grad_u);
-      for (unsigned int q = 0; q < nq; ++q) {
-        Tensor2 F = grad_u[q];
-        for (int d = 0; d < 3; ++d) F[d][d] += 1;
-        if (!material.evaluate(F, P, tangent ? &A : nullptr)) {
-          if (tangent) matrix.compress(VectorOperation::add);  // leave PETSc's matrix usable
-          return false;
-        }
-        const double jxw = values.JxW(q);
-        for (unsigned int i = 0; i < n; ++i) grad_phi[i] = values.shape_grad_component(i, q, component[i]);
-        if (tangent)  // a_grad[j][c] = A[c][.][c_j][.] grad phi_j, so that K_ij = grad phi_i . a_grad[j][c_i]
-          for (unsigned int j = 0; j < n; ++j)
-            for (int c = 0; c < 3; ++c)
-              for (int J = 0; J < 3; ++J) {
-                double v = 0;
-                for (int L = 0; L < 3; ++L) v += A[c][J][component[j]][L] * grad_phi[j][L];
-                a_grad[j][c][J] = v * jxw;
-              }
-        for (unsigned int i = 0; i < n; ++i) {
-          const unsigned int ci = component[i];
-          double f = 0;
-          for (int J = 0; J < 3; ++J) f += P[ci][J] * grad_phi[i][J];
-          cell_internal(i) += f * jxw;
-          if (!tangent) continue;
-          for (unsigned int j = 0; j < n; ++j) cell_matrix(i, j) += grad_phi[i] * a_grad[j][ci];
-        }
+      cell->get_dof_indices(local);
+      std::copy(local.begin(), local.end(), c.indices.begin() + std::size_t(k) * c.n);
+      for (unsigned int q = 0; q < c.nq; ++q) {
+        c.jxw[std::size_t(k) * c.nq + q] = values.JxW(q);
+        for (unsigned int b = 0; b < c.nbase; ++b)
+          c.gradients[(std::size_t(k) * c.nq + q) * c.nbase + b] =
+              values.shape_grad_component(fe->component_to_system_index(0, b), q, 0);
       }
-      for (unsigned int i = 0; i < n; ++i) cell_rhs(i) = -cell_internal(i);
+      cell_external = 0;
       if (body_force)
-        for (unsigned int q = 0; q < nq; ++q) {
-          const Tensor<1, 3> b = static_factor(lambda) * body_force(values.quadrature_point(q));
-          for (unsigned int i = 0; i < n; ++i)
-            cell_rhs(i) += b[component[i]] * values.shape_value_component(i, q, component[i]) * values.JxW(q);
+        for (unsigned int q = 0; q < c.nq; ++q) {
+          const Tensor<1, 3> f = body_force(values.quadrature_point(q));
+          for (unsigned int i = 0; i < c.n; ++i)
+            cell_external(i) += f[c.component[i]] * values.shape_value_component(i, q, c.component[i]) * values.JxW(q);
         }
       for (const unsigned int f : cell->face_indices()) {
         if (!cell->face(f)->at_boundary()) continue;
@@ -263,28 +256,84 @@ struct QuasiStaticSolver::Impl {
           if (cell->face(f)->boundary_id() != t.boundary) continue;
           face_values.reinit(cell, f);
           for (unsigned int q = 0; q < face_quadrature->size(); ++q)
-            for (unsigned int i = 0; i < n; ++i)
-              cell_rhs(i) += static_factor(lambda) * t.value[component[i]] * face_values.shape_value_component(i, q, component[i]) *
-                             face_values.JxW(q);
+            for (unsigned int i = 0; i < c.n; ++i)
+              cell_external(i) += t.value[c.component[i]] * face_values.shape_value_component(i, q, c.component[i]) *
+                                  face_values.JxW(q);
         }
       }
-      cell->get_dof_indices(indices);
-      if (internal) {
-        for (unsigned int i = 0; i < n; ++i) cell_internal(i) = -cell_rhs(i);  // f_int - f_ext
-        internal->add(indices, cell_internal);
+      c.external.add(local, cell_external);
+      ++k;
+    }
+    c.built = true;
+  }
+
+  bool assemble_impl(double lambda, Vector<double>& r, bool tangent, Vector<double>* internal) {
+    if (!cache.built) build_cache();
+    const Cache& c = cache;
+    const unsigned int n = c.n, nq = c.nq;
+    FullMatrix<double> cell_matrix(n, n);
+    Vector<double> cell_rhs(n), cell_internal(n);
+    std::vector<types::global_dof_index> indices(n);
+    std::vector<double> u_local(n);
+    std::vector<std::array<Tensor<1, 3>, 3>> a_grad(n);
+    r = 0;
+    if (internal) *internal = 0;
+    if (tangent) matrix = 0;
+    Tensor2 P;
+    Tensor4 A;
+    const unsigned int cells = tria.n_active_cells();
+    for (unsigned int k = 0; k < cells; ++k) {
+      for (unsigned int i = 0; i < n; ++i) {
+        indices[i] = c.indices[std::size_t(k) * n + i];
+        u_local[i] = u[indices[i]];
       }
+      cell_matrix = 0;
+      cell_internal = 0;
+      for (unsigned int q = 0; q < nq; ++q) {
+        const Tensor<1, 3>* grad = &c.gradients[(std::size_t(k) * nq + q) * c.nbase];
+        const double jxw = c.jxw[std::size_t(k) * nq + q];
+        Tensor2 F;
+        for (unsigned int i = 0; i < n; ++i)
+          for (int J = 0; J < 3; ++J) F[c.component[i]][J] += u_local[i] * grad[c.base[i]][J];
+        for (int d = 0; d < 3; ++d) F[d][d] += 1;
+        if (!material.evaluate(F, P, tangent ? &A : nullptr)) {
+          if (tangent) matrix.compress(VectorOperation::add);  // leave PETSc's matrix usable
+          return false;
+        }
+        if (tangent)  // a_grad[j][c] = A[c][.][c_j][.] grad phi_j, so that K_ij = grad phi_i . a_grad[j][c_i]
+          for (unsigned int j = 0; j < n; ++j) {
+            const Tensor<1, 3>& g = grad[c.base[j]];
+            for (int ci = 0; ci < 3; ++ci)
+              for (int J = 0; J < 3; ++J) {
+                double v = 0;
+                for (int L = 0; L < 3; ++L) v += A[ci][J][c.component[j]][L] * g[L];
+                a_grad[j][ci][J] = v * jxw;
+              }
+          }
+        for (unsigned int i = 0; i < n; ++i) {
+          const unsigned int ci = c.component[i];
+          const Tensor<1, 3>& g = grad[c.base[i]];
+          cell_internal(i) += (P[ci][0] * g[0] + P[ci][1] * g[1] + P[ci][2] * g[2]) * jxw;
+          if (!tangent) continue;
+          for (unsigned int j = 0; j < n; ++j) cell_matrix(i, j) += g * a_grad[j][ci];
+        }
+      }
+      for (unsigned int i = 0; i < n; ++i) cell_rhs(i) = -cell_internal(i);
+      if (internal) internal->add(indices, cell_internal);
       if (tangent)
         constraints.distribute_local_to_global(cell_matrix, cell_rhs, indices, matrix, r);
       else
         constraints.distribute_local_to_global(cell_rhs, indices, r);
     }
     if (tangent) matrix.compress(VectorOperation::add);
+    r.add(static_factor(lambda), c.external);
+    if (internal) internal->add(-static_factor(lambda), c.external);
     for (const Patch& p : patches)
-      for (int c = 0; c < 3; ++c) {
-        const double f = p.converged_force[c] + lambda * (p.force[c] - p.converged_force[c]);
+      for (int comp = 0; comp < 3; ++comp) {
+        const double f = p.converged_force[comp] + lambda * (p.force[comp] - p.converged_force[comp]);
         if (f == 0) continue;
-        r.add(f, p.h[c]);
-        if (internal) internal->add(-f, p.h[c]);
+        r.add(f, p.h[comp]);
+        if (internal) internal->add(-f, p.h[comp]);
       }
     constraints.set_zero(r);
     return true;
@@ -410,6 +459,7 @@ void QuasiStaticSolver::prescribe_displacement(unsigned int boundary_id, std::ar
 
 void QuasiStaticSolver::apply_traction(unsigned int boundary_id, const Tensor<1, 3>& traction) {
   impl_->tractions.push_back({boundary_id, traction});
+  impl_->cache.built = false;
 }
 
 unsigned int QuasiStaticSolver::dofs() const { return impl_->dof.n_dofs(); }
@@ -568,6 +618,7 @@ FullMatrix<double> QuasiStaticSolver::compliance() {
 
 void QuasiStaticSolver::apply_body_force(std::function<Tensor<1, 3>(const Point<3>&)> force) {
   impl_->body_force = std::move(force);
+  impl_->cache.built = false;
 }
 
 double QuasiStaticSolver::l2_error(const std::function<Tensor<1, 3>(const Point<3>&)>& exact) const {
