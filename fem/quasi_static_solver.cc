@@ -208,8 +208,39 @@ struct QuasiStaticSolver::Impl {
     std::vector<types::global_dof_index> indices;
     std::vector<double> jxw;
     std::vector<Tensor<1, 3>> gradients;  // [cell][q][base]
+    std::vector<double> shape_values;     // [q][base]: reference values, the same on every cell
     Vector<double> external;
   } cache;
+
+  // Time stepping (enable_dynamics): the state at the start of the step and the step's constants.
+  bool dynamic = false;
+  QuasiStaticSolver::Dynamics dynamics;
+  Vector<double> u_old, v_old, a_old;
+  // a+ = c0 (u+ - u_old) - c1 v_old - c2 a_old;   v+ = v_old + dv_base + dv_gain a+  (Newmark)
+  //                                               v+ = (u+ - u_old)/dt               (backward Euler)
+  double c0 = 0, c1 = 0, c2 = 0;
+  void step_constants() {
+    const double dt = dynamics.time_step_s;
+    if (dynamics.newmark) {
+      c0 = 1 / (dynamics.beta * dt * dt), c1 = 1 / (dynamics.beta * dt), c2 = (1 - 2 * dynamics.beta) / (2 * dynamics.beta);
+    } else {
+      c0 = 1 / (dt * dt), c1 = 1 / dt, c2 = 0;
+    }
+  }
+  double acceleration(double u_new, types::global_dof_index i) const {
+    return c0 * (u_new - u_old[i]) - c1 * v_old[i] - c2 * a_old[i];
+  }
+  double velocity(double u_new, double a_new, types::global_dof_index i) const {
+    const double dt = dynamics.time_step_s;
+    if (dynamics.newmark) return v_old[i] + dt * ((1 - dynamics.gamma) * a_old[i] + dynamics.gamma * a_new);
+    return (u_new - u_old[i]) / dt;
+  }
+  // d(a + alpha v)/du+ for the tangent.
+  double inertia_gain() const {
+    const double dt = dynamics.time_step_s;
+    const double dv = dynamics.newmark ? dynamics.gamma * dt * c0 : 1 / dt;
+    return c0 + dynamics.rayleigh_mass_per_s * dv;
+  }
 
   void build_cache() {
     Cache& c = cache;
@@ -226,6 +257,10 @@ struct QuasiStaticSolver::Impl {
     c.indices.resize(std::size_t(cells) * c.n);
     c.jxw.resize(std::size_t(cells) * c.nq);
     c.gradients.resize(std::size_t(cells) * c.nq * c.nbase);
+    c.shape_values.resize(std::size_t(c.nq) * c.nbase);
+    for (unsigned int q = 0; q < c.nq; ++q)
+      for (unsigned int b = 0; b < c.nbase; ++b)
+        c.shape_values[q * c.nbase + b] = fe->base_element(0).shape_value(b, quadrature->point(q));
     c.external.reinit(dof.n_dofs());
     FEValues<3> values(*mapping, *fe, *quadrature,
                        update_gradients | update_JxW_values | update_values | update_quadrature_points);
@@ -316,6 +351,27 @@ struct QuasiStaticSolver::Impl {
           cell_internal(i) += (P[ci][0] * g[0] + P[ci][1] * g[1] + P[ci][2] * g[2]) * jxw;
           if (!tangent) continue;
           for (unsigned int j = 0; j < n; ++j) cell_matrix(i, j) += g * a_grad[j][ci];
+        }
+      }
+      if (dynamic) {
+        // M (a+ + alpha v+) with the consistent mass, and its derivative in the tangent.
+        const double rho = dynamics.density_kg_per_m3, gain = inertia_gain();
+        std::vector<double>& inertial = u_local;  // reuse: a+ + alpha v+ per local dof
+        for (unsigned int i = 0; i < n; ++i) {
+          const double a_new = acceleration(u_local[i], indices[i]);
+          inertial[i] = a_new + dynamics.rayleigh_mass_per_s * velocity(u_local[i], a_new, indices[i]);
+        }
+        for (unsigned int q = 0; q < nq; ++q) {
+          const double* shape = &c.shape_values[q * c.nbase];
+          const double w = rho * c.jxw[std::size_t(k) * nq + q];
+          double field[3] = {0, 0, 0};
+          for (unsigned int j = 0; j < n; ++j) field[c.component[j]] += shape[c.base[j]] * inertial[j];
+          for (unsigned int i = 0; i < n; ++i) {
+            cell_internal(i) += w * shape[c.base[i]] * field[c.component[i]];
+            if (!tangent) continue;
+            for (unsigned int j = 0; j < n; ++j)
+              if (c.component[j] == c.component[i]) cell_matrix(i, j) += gain * w * shape[c.base[i]] * shape[c.base[j]];
+          }
         }
       }
       for (unsigned int i = 0; i < n; ++i) cell_rhs(i) = -cell_internal(i);
@@ -616,6 +672,18 @@ FullMatrix<double> QuasiStaticSolver::compliance() {
   return w;
 }
 
+void QuasiStaticSolver::enable_dynamics(const Dynamics& dynamics) {
+  if (!(dynamics.time_step_s > 0) || !(dynamics.density_kg_per_m3 > 0))
+    throw std::invalid_argument("dynamics: the time step and the density must be positive");
+  Impl& m = *impl_;
+  m.dynamic = true;
+  m.dynamics = dynamics;
+  m.step_constants();
+  m.u_old = m.u;
+  m.v_old.reinit(m.u.size());
+  m.a_old.reinit(m.u.size());
+}
+
 void QuasiStaticSolver::apply_body_force(std::function<Tensor<1, 3>(const Point<3>&)> force) {
   impl_->body_force = std::move(force);
   impl_->cache.built = false;
@@ -637,6 +705,7 @@ double QuasiStaticSolver::l2_error(const std::function<Tensor<1, 3>(const Point<
 SolveReport QuasiStaticSolver::solve(const NewtonSettings& s) {
   impl_->setup_constraints();
   const Vector<double> initial = impl_->u;
+  if (impl_->dynamic) impl_->u_old = initial;
   impl_->assembly_s = impl_->factorisation_s = impl_->solve_s = 0;
   SolveReport report;
   const auto times = [&] {
@@ -667,6 +736,16 @@ SolveReport QuasiStaticSolver::solve(const NewtonSettings& s) {
   report.converged = true;
   times();
   impl_->static_done = 1;
+  if (impl_->dynamic) {  // advance the time-stepping state
+    Impl& m = *impl_;
+    for (types::global_dof_index i = 0; i < m.u.size(); ++i) {
+      const double a_new = m.acceleration(m.u[i], i);
+      const double v_new = m.velocity(m.u[i], a_new, i);
+      m.a_old[i] = a_new;
+      m.v_old[i] = v_new;
+    }
+    m.u_old = m.u;
+  }
   for (auto& p : impl_->patches) p.converged_force = p.force;
   return report;
 }

@@ -79,6 +79,21 @@ class QuasiStaticSolver {
 
   SolveReport solve(const NewtonSettings& settings);
 
+  // Inertia (and mass-proportional Rayleigh damping C = alpha M): once enabled, each solve() is one
+  // time step of length dt, R(u) + M (a + alpha v) = 0 at the new time, with
+  //   Newmark (beta, gamma):  a+ = (u+ - u - dt v)/(beta dt^2) - (1 - 2 beta)/(2 beta) a,
+  //                           v+ = v + dt ((1 - gamma) a + gamma a+)      (1/4, 1/2: no dissipation)
+  //   backward Euler:         v+ = (u+ - u)/dt,  a+ = (v+ - v)/dt          (first order, dissipative)
+  // M is the consistent mass matrix of density rho. The state starts at rest.
+  struct Dynamics {
+    double density_kg_per_m3 = 1000;
+    double time_step_s = 0.05;
+    bool newmark = true;  // false: backward Euler
+    double beta = 0.25, gamma = 0.5;
+    double rayleigh_mass_per_s = 0;  // alpha
+  };
+  void enable_dynamics(const Dynamics& dynamics);
+
   // Contact patches (ARCHITECTURE.md section 4): a probe acts on the surface through a smooth kernel
   // w(X) = (1 - (d/r)^2)^2 for reference distances d < r from the patch centre, normalised to unit
   // integral over the boundary. H_a u = int w_a u dA is the patch's displacement; a patch force F_a

@@ -88,4 +88,27 @@ std::unique_ptr<TissueModel> build_tissue_model(const config::Scene& scene) {
   return model;
 }
 
+std::optional<QuasiStaticSolver::Dynamics> scene_dynamics(const config::Scene& scene) {
+  const bool damping = scene.effects.has(config::Effect::damping);
+  if (!scene.effects.has(config::Effect::inertia)) {
+    if (damping) throw std::runtime_error("effect damping needs effect inertia (Rayleigh damping acts on the motion)");
+    return std::nullopt;
+  }
+  QuasiStaticSolver::Dynamics d;
+  d.density_kg_per_m3 = scene.material.density_kg_per_m3;
+  d.time_step_s = 1.0 / scene.solver.rate_hz;
+  switch (scene.effects.integrator) {
+    case config::TimeIntegrator::newmark: d.newmark = true; break;
+    case config::TimeIntegrator::backward_euler: d.newmark = false; break;
+    case config::TimeIntegrator::hht:
+      throw std::runtime_error("time integrator hht is not implemented yet; use newmark or backward_euler");
+  }
+  if (damping) {
+    if (scene.effects.rayleigh_stiffness_s != 0)
+      throw std::runtime_error("stiffness-proportional Rayleigh damping is not implemented yet; use mass_per_s only");
+    d.rayleigh_mass_per_s = scene.effects.rayleigh_mass_per_s;
+  }
+  return d;
+}
+
 }  // namespace fetouch::fem
