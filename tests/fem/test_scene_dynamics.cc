@@ -1,0 +1,39 @@
+// A scene's inertia and damping effects become the solver's time stepping, or are refused by name.
+#include <gtest/gtest.h>
+
+#include "config/scene_loader.h"
+#include "fem/tissue_model.h"
+
+namespace fetouch::fem {
+namespace {
+
+config::Scene scene_with(const std::string& effects) {
+  const std::string text = "name: s\nunits: SI\nmesh:\n  generate: {shape: box, size_m: [0.1, 0.1, 0.1], refinements: 0}\n"
+                           "  element: p1\nmaterial: {model: neo_hookean, youngs_modulus_pa: 5000, poisson_ratio: 0.3, "
+                           "density_kg_per_m3: 1100}\nsolver: {rate_hz: 25}\neffects:\n" + effects;
+  return config::parse_scene(text, "test", ".").scene;
+}
+
+TEST(SceneDynamics, InertiaAndMassDampingMapToTheSolver) {
+  EXPECT_FALSE(scene_dynamics(scene_with("  - gravity\n")).has_value());
+  const auto d = scene_dynamics(scene_with("  - inertia: {integrator: newmark}\n  - damping: {mass_coefficient_per_s: 2}\n"));
+  ASSERT_TRUE(d.has_value());
+  EXPECT_TRUE(d->newmark);
+  EXPECT_DOUBLE_EQ(d->time_step_s, 1.0 / 25);  // one step per solver frame
+  EXPECT_DOUBLE_EQ(d->density_kg_per_m3, 1100);
+  EXPECT_DOUBLE_EQ(d->rayleigh_mass_per_s, 2);
+  EXPECT_FALSE(scene_dynamics(scene_with("  - inertia\n"))->newmark);  // backward Euler by default
+}
+
+TEST(SceneDynamics, WhatTheSolverCannotDoIsRefusedByName) {
+  try {
+    scene_dynamics(scene_with("  - inertia: {integrator: hht}\n"));
+    FAIL() << "hht accepted";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("hht"), std::string::npos);
+  }
+  EXPECT_THROW(scene_dynamics(scene_with("  - inertia\n  - damping: {stiffness_coefficient_s: 0.01}\n")), std::runtime_error);
+}
+
+}  // namespace
+}  // namespace fetouch::fem
