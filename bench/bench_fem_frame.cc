@@ -4,13 +4,13 @@
 // 2-contact condensed compliance (one factorisation, 6 solves). Serial, MUMPS. Counters: dofs.
 //   build/release/bench/bench_fem --benchmark_filter=Frame
 #include <benchmark/benchmark.h>
-#include <deal.II/base/mpi.h>
 #include <deal.II/grid/grid_generator.h>
 #include <deal.II/grid/tria.h>
 
 #include <cmath>
 
 #include "fem/material.h"
+#include "fem/mpi_session.h"
 #include "fem/quasi_static_solver.h"
 
 namespace {
@@ -65,7 +65,7 @@ BENCHMARK(BM_FemFrame)
 }  // namespace
 
 int main(int argc, char** argv) {
-  dealii::Utilities::MPI::MPI_InitFinalize mpi(argc, argv, 1);
+  fetouch::fem::MpiSession mpi(argc, argv);
   benchmark::Initialize(&argc, argv);
   benchmark::RunSpecifiedBenchmarks();
   benchmark::Shutdown();

@@ -302,9 +302,35 @@ struct QuasiStaticSolver::Impl {
     c.built = true;
   }
 
+  // Gathers cell k's local values of a global vector.
+  void gather(unsigned int k, const Vector<double>& global, std::vector<double>& local) const {
+    for (unsigned int i = 0; i < cache.n; ++i) local[i] = global[cache.indices[std::size_t(k) * cache.n + i]];
+  }
+
+  // F = I + grad u at quadrature point q of cell k, from the cell's local displacements.
+  Tensor2 deformation_gradient(unsigned int k, unsigned int q, const std::vector<double>& u_local) const {
+    const Cache& c = cache;
+    const Tensor<1, 3>* grad = &c.gradients[(std::size_t(k) * c.nq + q) * c.nbase];
+    Tensor2 F;
+    for (unsigned int i = 0; i < c.n; ++i)
+      for (int J = 0; J < 3; ++J) F[c.component[i]][J] += u_local[i] * grad[c.base[i]][J];
+    for (int d = 0; d < 3; ++d) F[d][d] += 1;
+    return F;
+  }
+
   bool assemble_impl(double lambda, Vector<double>& r, bool tangent, Vector<double>* internal) {
     if (!cache.built) build_cache();
     const Cache& c = cache;
+    // With inertia: a+ + alpha v+ at every dof, once per assembly (not once per cell sharing it).
+    Vector<double> inertial;
+    if (dynamic) {
+      inertial.reinit(u.size());
+      for (types::global_dof_index i = 0; i < u.size(); ++i) {
+        const double a_new = acceleration(u[i], i);
+        inertial[i] = a_new + dynamics.rayleigh_mass_per_s * velocity(u[i], a_new, i);
+      }
+    }
+    std::vector<double> inertial_local(dynamic ? c.n : 0);
     const unsigned int n = c.n, nq = c.nq;
     FullMatrix<double> cell_matrix(n, n);
     Vector<double> cell_rhs(n), cell_internal(n);
@@ -318,20 +344,14 @@ struct QuasiStaticSolver::Impl {
     Tensor4 A;
     const unsigned int cells = tria.n_active_cells();
     for (unsigned int k = 0; k < cells; ++k) {
-      for (unsigned int i = 0; i < n; ++i) {
-        indices[i] = c.indices[std::size_t(k) * n + i];
-        u_local[i] = u[indices[i]];
-      }
+      std::copy_n(c.indices.begin() + std::size_t(k) * n, n, indices.begin());
+      gather(k, u, u_local);
       cell_matrix = 0;
       cell_internal = 0;
       for (unsigned int q = 0; q < nq; ++q) {
         const Tensor<1, 3>* grad = &c.gradients[(std::size_t(k) * nq + q) * c.nbase];
         const double jxw = c.jxw[std::size_t(k) * nq + q];
-        Tensor2 F;
-        for (unsigned int i = 0; i < n; ++i)
-          for (int J = 0; J < 3; ++J) F[c.component[i]][J] += u_local[i] * grad[c.base[i]][J];
-        for (int d = 0; d < 3; ++d) F[d][d] += 1;
-        if (!material.evaluate(F, P, tangent ? &A : nullptr)) {
+        if (!material.evaluate(deformation_gradient(k, q, u_local), P, tangent ? &A : nullptr)) {
           if (tangent) matrix.compress(VectorOperation::add);  // leave PETSc's matrix usable
           return false;
         }
@@ -356,16 +376,12 @@ struct QuasiStaticSolver::Impl {
       if (dynamic) {
         // M (a+ + alpha v+) with the consistent mass, and its derivative in the tangent.
         const double rho = dynamics.density_kg_per_m3, gain = inertia_gain();
-        std::vector<double>& inertial = u_local;  // reuse: a+ + alpha v+ per local dof
-        for (unsigned int i = 0; i < n; ++i) {
-          const double a_new = acceleration(u_local[i], indices[i]);
-          inertial[i] = a_new + dynamics.rayleigh_mass_per_s * velocity(u_local[i], a_new, indices[i]);
-        }
+        gather(k, inertial, inertial_local);
         for (unsigned int q = 0; q < nq; ++q) {
           const double* shape = &c.shape_values[q * c.nbase];
           const double w = rho * c.jxw[std::size_t(k) * nq + q];
           double field[3] = {0, 0, 0};
-          for (unsigned int j = 0; j < n; ++j) field[c.component[j]] += shape[c.base[j]] * inertial[j];
+          for (unsigned int j = 0; j < n; ++j) field[c.component[j]] += shape[c.base[j]] * inertial_local[j];
           for (unsigned int i = 0; i < n; ++i) {
             cell_internal(i) += w * shape[c.base[i]] * field[c.component[i]];
             if (!tangent) continue;
@@ -395,49 +411,66 @@ struct QuasiStaticSolver::Impl {
     return true;
   }
 
-  void build_patch(Patch& p) {
-    FEFaceValues<3> face_values(*mapping, *fe, *face_quadrature, update_values | update_JxW_values | update_quadrature_points);
-    const unsigned int n = fe->n_dofs_per_cell();
-    std::vector<types::global_dof_index> indices(n);
-    for (Vector<double>& row : p.h) row.reinit(dof.n_dofs());
-    double total = 0;
+  // Calls visit(cell, face_values, q, w, first) at every boundary quadrature point within a patch's
+  // radius: w = (1 - (d/r)^2)^2 JxW is the unnormalised kernel weight, `first` marks the first
+  // point visited on a face (to evaluate per-face data once); face_values carries `flags`.
+  template <class Visit>
+  void for_each_patch_point(const Patch& p, UpdateFlags flags, Visit visit) const {
+    FEFaceValues<3> face_values(*mapping, *fe, *face_quadrature, flags | update_JxW_values | update_quadrature_points);
     for (const auto& cell : dof.active_cell_iterators())
       for (const unsigned int f : cell->face_indices()) {
         if (!cell->face(f)->at_boundary()) continue;
         // Skip faces that are entirely out of reach (a cheap bound through the face's diameter).
         if (cell->face(f)->center().distance(p.center) > p.radius + cell->face(f)->diameter()) continue;
         face_values.reinit(cell, f);
-        cell->get_dof_indices(indices);
+        bool first = true;
         for (unsigned int q = 0; q < face_quadrature->size(); ++q) {
           const double d = face_values.quadrature_point(q).distance(p.center) / p.radius;
           if (d >= 1) continue;
-          const double w = (1 - d * d) * (1 - d * d) * face_values.JxW(q);
-          total += w;
-          for (unsigned int i = 0; i < n; ++i) {
-            const unsigned int c = fe->system_to_component_index(i).first;
-            p.h[c][indices[i]] += w * face_values.shape_value_component(i, q, c);
-          }
+          visit(cell, face_values, q, (1 - d * d) * (1 - d * d) * face_values.JxW(q), first);
+          first = false;
         }
       }
+  }
+
+  void build_patch(Patch& p) {
+    const unsigned int n = fe->n_dofs_per_cell();
+    std::vector<types::global_dof_index> indices(n);
+    for (Vector<double>& row : p.h) row.reinit(dof.n_dofs());
+    double total = 0;
+    for_each_patch_point(p, update_values,
+                         [&](const auto& cell, const FEFaceValues<3>& values, unsigned int q, double w, bool first) {
+      total += w;
+      if (first) cell->get_dof_indices(indices);
+      for (unsigned int i = 0; i < n; ++i) {
+        const unsigned int c = fe->system_to_component_index(i).first;
+        p.h[c][indices[i]] += w * values.shape_value_component(i, q, c);
+      }
+    });
     if (!(total > 0))
       throw std::invalid_argument("contact patch: no boundary surface within the radius of its centre");
     for (Vector<double>& row : p.h) row /= total;
   }
 
-  void solve_linear(const Vector<double>& rhs, Vector<double>& du) {
+  // x = K^-1 rhs with the current factorisation (constrained entries of x set by the constraints).
+  void solve_factored(const Vector<double>& rhs, Vector<double>& x) {
     const IndexSet owned = complete_index_set(dof.n_dofs());
-    PETScWrappers::MPI::Vector b(owned, MPI_COMM_SELF), x(owned, MPI_COMM_SELF);
+    PETScWrappers::MPI::Vector b(owned, MPI_COMM_SELF), solution(owned, MPI_COMM_SELF);
     for (types::global_dof_index i = 0; i < rhs.size(); ++i) b[i] = rhs[i];
     b.compress(VectorOperation::insert);
+    direct.solve(b, solution);
+    x.reinit(rhs.size());
+    for (types::global_dof_index i = 0; i < rhs.size(); ++i) x[i] = solution[i];
+    constraints.distribute(x);
+  }
+
+  void solve_linear(const Vector<double>& rhs, Vector<double>& du) {
     auto start = std::chrono::steady_clock::now();
     direct.factor(matrix, MPI_COMM_SELF);
     factorisation_s += since(start);
     start = std::chrono::steady_clock::now();
-    direct.solve(b, x);
+    solve_factored(rhs, du);
     solve_s += since(start);
-    du.reinit(rhs.size());
-    for (types::global_dof_index i = 0; i < rhs.size(); ++i) du[i] = x[i];
-    constraints.distribute(du);
   }
 
   StepReport newton(double lambda, const NewtonSettings& s) {
@@ -523,20 +556,18 @@ unsigned int QuasiStaticSolver::dofs() const { return impl_->dof.n_dofs(); }
 unsigned int QuasiStaticSolver::cells() const { return impl_->tria.n_active_cells(); }
 
 QuasiStaticSolver::CellFields QuasiStaticSolver::cell_fields() const {
-  const Impl& m = *impl_;
+  Impl& m = *impl_;
+  if (!m.cache.built) m.build_cache();
+  const unsigned int cells = m.tria.n_active_cells(), nq = m.cache.nq;
   CellFields fields;
-  fields.jacobian.reserve(m.tria.n_active_cells());
-  fields.von_mises.reserve(m.tria.n_active_cells());
-  FEValues<3> values(*m.mapping, *m.fe, *m.quadrature, update_gradients);
-  const FEValuesExtractors::Vector displacement(0);
-  std::vector<Tensor<2, 3>> grad_u(m.quadrature->size());
-  for (const auto& cell : m.dof.active_cell_iterators()) {
-    values.reinit(cell);
-    values[displacement].get_function_gradients(m.u, grad_u);
+  fields.jacobian.reserve(cells);
+  fields.von_mises.reserve(cells);
+  std::vector<double> u_local(m.cache.n);
+  for (unsigned int k = 0; k < cells; ++k) {
+    m.gather(k, m.u, u_local);
     double j_sum = 0, vm_sum = 0;
-    for (const auto& g : grad_u) {
-      Tensor<2, 3> F = g;
-      for (int i = 0; i < 3; ++i) F[i][i] += 1;
+    for (unsigned int q = 0; q < nq; ++q) {
+      const Tensor2 F = m.deformation_gradient(k, q, u_local);
       const double j = determinant(F);
       j_sum += j;
       Tensor2 P;
@@ -546,8 +577,8 @@ QuasiStaticSolver::CellFields QuasiStaticSolver::cell_fields() const {
         vm_sum += std::sqrt(1.5 * scalar_product(dev, dev));
       }
     }
-    fields.jacobian.push_back(j_sum / grad_u.size());
-    fields.von_mises.push_back(vm_sum / grad_u.size());
+    fields.jacobian.push_back(j_sum / nq);
+    fields.von_mises.push_back(vm_sum / nq);
   }
   return fields;
 }
@@ -558,13 +589,9 @@ double QuasiStaticSolver::max_displacement() const {
   double worst = 0;
   for (const auto& cell : m.dof.active_cell_iterators()) {
     cell->get_dof_indices(indices);
-    for (unsigned int node = 0; node < indices.size(); ++node) {
-      if (m.fe->system_to_component_index(node).first != 0) continue;
-      // The three components of this support point are the dofs with the same base index.
+    for (unsigned int node = 0; node < m.fe->base_element(0).n_dofs_per_cell(); ++node) {
       Tensor<1, 3> u;
-      for (unsigned int other = 0; other < indices.size(); ++other)
-        if (m.fe->system_to_component_index(other).second == m.fe->system_to_component_index(node).second)
-          u[m.fe->system_to_component_index(other).first] = m.u[indices[other]];
+      for (unsigned int c = 0; c < 3; ++c) u[c] = m.u[indices[m.fe->component_to_system_index(c, node)]];
       worst = std::max(worst, u.norm());
     }
   }
@@ -617,32 +644,22 @@ int QuasiStaticSolver::patches() const { return static_cast<int>(impl_->patches.
 Tensor<1, 3> QuasiStaticSolver::patch_normal(int patch) const {
   const Impl& m = *impl_;
   const auto& p = m.patches.at(patch);
-  FEFaceValues<3> face_values(*m.mapping, *m.fe, *m.face_quadrature,
-                              update_gradients | update_normal_vectors | update_JxW_values | update_quadrature_points);
   const FEValuesExtractors::Vector displacement(0);
   std::vector<Tensor<2, 3>> grad_u(m.face_quadrature->size());
   Tensor<1, 3> sum;
-  for (const auto& cell : m.dof.active_cell_iterators())
-    for (const unsigned int f : cell->face_indices()) {
-      if (!cell->face(f)->at_boundary()) continue;
-      if (cell->face(f)->center().distance(p.center) > p.radius + cell->face(f)->diameter()) continue;
-      face_values.reinit(cell, f);
-      face_values[displacement].get_function_gradients(m.u, grad_u);
-      for (unsigned int q = 0; q < m.face_quadrature->size(); ++q) {
-        const double d = face_values.quadrature_point(q).distance(p.center) / p.radius;
-        if (d >= 1) continue;
-        Tensor<2, 3> F = grad_u[q];
-        for (int i = 0; i < 3; ++i) F[i][i] += 1;
-        const Tensor<2, 3> cofactor = determinant(F) * transpose(invert(F));
-        sum += (1 - d * d) * (1 - d * d) * face_values.JxW(q) * (cofactor * face_values.normal_vector(q));
-      }
-    }
+  m.for_each_patch_point(p, update_gradients | update_normal_vectors,
+                         [&](const auto&, const FEFaceValues<3>& values, unsigned int q, double w, bool first) {
+                           if (first) values[displacement].get_function_gradients(m.u, grad_u);
+                           Tensor<2, 3> F = grad_u[q];
+                           for (int i = 0; i < 3; ++i) F[i][i] += 1;
+                           sum += w * (determinant(F) * transpose(invert(F)) * values.normal_vector(q));
+                         });
   return sum / sum.norm();
 }
 
 FullMatrix<double> QuasiStaticSolver::compliance() {
   Impl& m = *impl_;
-  if (m.matrix.m() == 0) m.setup_constraints();
+  m.setup_constraints();
   Vector<double> r(m.dof.n_dofs());
   auto start = std::chrono::steady_clock::now();
   if (!m.assemble(1.0, r, /*tangent=*/true)) throw std::runtime_error("compliance: an element is inverted");
@@ -652,18 +669,11 @@ FullMatrix<double> QuasiStaticSolver::compliance() {
   m.compliance_times.factorisation_s = Impl::since(start);
   start = std::chrono::steady_clock::now();
   const unsigned int columns = 3 * m.patches.size();
-  const IndexSet owned = complete_index_set(m.dof.n_dofs());
   std::vector<Vector<double>> solutions(columns);
   for (unsigned int k = 0; k < columns; ++k) {
     Vector<double> rhs = m.patches[k / 3].h[k % 3];
     m.constraints.set_zero(rhs);
-    PETScWrappers::MPI::Vector b(owned, MPI_COMM_SELF), x(owned, MPI_COMM_SELF);
-    for (types::global_dof_index i = 0; i < rhs.size(); ++i) b[i] = rhs[i];
-    b.compress(VectorOperation::insert);
-    m.direct.solve(b, x);
-    solutions[k].reinit(rhs.size());
-    for (types::global_dof_index i = 0; i < rhs.size(); ++i) solutions[k][i] = x[i];
-    m.constraints.distribute(solutions[k]);
+    m.solve_factored(rhs, solutions[k]);
   }
   m.compliance_times.solves_s = Impl::since(start);
   FullMatrix<double> w(columns, columns);
@@ -679,7 +689,6 @@ void QuasiStaticSolver::enable_dynamics(const Dynamics& dynamics) {
   m.dynamic = true;
   m.dynamics = dynamics;
   m.step_constants();
-  m.u_old = m.u;
   m.v_old.reinit(m.u.size());
   m.a_old.reinit(m.u.size());
 }
@@ -744,7 +753,6 @@ SolveReport QuasiStaticSolver::solve(const NewtonSettings& s) {
       m.a_old[i] = a_new;
       m.v_old[i] = v_new;
     }
-    m.u_old = m.u;
   }
   for (auto& p : impl_->patches) p.converged_force = p.force;
   return report;

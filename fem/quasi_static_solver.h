@@ -12,8 +12,8 @@
 // Linear systems: PETSc's MUMPS (Cholesky-type symmetric factorisation) through deal.II.
 //
 // Elements: P1/P2 on tetrahedra, Q1/Q2 on hexahedra, chosen from the triangulation's cells and the
-// degree. One MPI rank for now (PETSc objects on MPI_COMM_SELF; MPI must be initialised, e.g. by
-// dealii::Utilities::MPI::MPI_InitFinalize in main); the MPI-parallel version reshapes this class.
+// degree. One MPI rank for now (PETSc objects on MPI_COMM_SELF; MPI must be initialised, by a
+// fem::MpiSession in main); the MPI-parallel version reshapes this class.
 #pragma once
 
 #include <deal.II/base/tensor.h>

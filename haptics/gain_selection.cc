@@ -38,13 +38,12 @@ class UncertaintySet {
       const double b = problem.damping.size() ? v.dot(problem.damping * v) : 0.0;
       modes_.push_back({lambda, std::max(b, 0.0)});
     }
-    smallest_ = modes_.front().stiffness;
     const int samples = std::max(options.scale_samples, options.margin > 0 ? 2 : 1);
     for (int j = 0; j < samples; ++j)
       scales_.push_back(samples == 1 ? 1.0 : 1 - options.margin + 2 * options.margin * j / (samples - 1));
   }
 
-  double smallest_stiffness() const { return smallest_; }
+  double smallest_stiffness() const { return modes_.front().stiffness; }  // eigenvalues ascend
 
   // The robust radius: the largest over every (mode, scale). A search only needs to know whether a
   // trial beats the best so far, so the scan stops as soon as one loop exceeds `cutoff`, starting
@@ -78,7 +77,6 @@ class UncertaintySet {
   const GainProblem& problem_;
   std::vector<Mode> modes_;
   std::vector<double> scales_;
-  double smallest_ = 1;
   mutable int worst_index_ = 0;
 };
 
@@ -127,16 +125,16 @@ GainSelection select_integral(const UncertaintySet& set, const GainProblem& prob
   constexpr int grid = 9;
   double best_radius = std::numeric_limits<double>::infinity();
   double kh = 0, ni = 0;
-  double step_kh = lambda / grid, step_ni = lambda / grid;
+  double step = lambda / grid;  // the same for Kh and N I
   if (start && start->proportional > 0 && start->integral > 0) {
     // Warm start from the previous frame's gains: the stiffness moves little between frames.
     kh = start->proportional, ni = start->integral * n;
     best_radius = set.radius(*start, best.evaluations);
-    step_kh = step_ni = lambda / (4 * grid);
+    step = lambda / (4 * grid);
   }
   if (!(best_radius < 1)) {  // cold start, or the previous gains are no longer stable
     best_radius = std::numeric_limits<double>::infinity();
-    step_kh = step_ni = lambda / grid;
+    step = lambda / grid;
     for (int a = 0; a < grid; ++a)
       for (int b = 0; b < grid; ++b) {
         const double trial_kh = lambda * 3.0 * (a + 0.5) / grid, trial_ni = lambda * 2.0 * (b + 0.5) / grid;
@@ -152,16 +150,16 @@ GainSelection select_integral(const UncertaintySet& set, const GainProblem& prob
   // Opportunistic polling: the move that succeeded last is tried first, the first improvement is
   // taken, and the step halves when no move improves by more than a part in 1e9.
   int first = 0;
-  for (int it = 0; it < 100 && step_kh > 1e-4 * lambda; ++it) {
+  for (int it = 0; it < 100 && step > 1e-4 * lambda; ++it) {
     bool moved = false;
     for (int m = 0; m < 16 && !moved; ++m) {
       const int move = (first + m) % 16;
-      const double trial_kh = kh + moves[move][0] * step_kh, trial_ni = ni + moves[move][1] * step_ni;
+      const double trial_kh = kh + moves[move][0] * step, trial_ni = ni + moves[move][1] * step;
       if (trial_kh <= 0 || trial_ni <= 0) continue;
       const double r = set.radius({trial_kh, trial_ni / n}, best.evaluations, best_radius);
       if (r < best_radius * (1 - 1e-9)) best_radius = r, kh = trial_kh, ni = trial_ni, moved = true, first = move;
     }
-    if (!moved) step_kh /= 2, step_ni /= 2;
+    if (!moved) step /= 2;
   }
   best.gains = {kh, ni / n};
   best.spectral_radius = best_radius;

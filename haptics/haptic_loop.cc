@@ -48,7 +48,6 @@ void HapticLoop::prepare(FrameSlot& slot) const {
   Eigen::MatrixXd normals = Eigen::MatrixXd::Zero(3 * m, m);
   for (int c = 0; c < m; ++c) normals.block<3, 1>(3 * c, c) = slot.update.frames[c].normal;
   slot.normal_compliance = normals.transpose() * slot.update.compliance * normals;
-  if (slot.normal_force.size() != m) slot.normal_force = Eigen::VectorXd::Zero(m);
   if (!settings_.schedule_gains) {
     slot.gains = settings_.gains;
     return;
@@ -57,9 +56,7 @@ void HapticLoop::prepare(FrameSlot& slot) const {
   problem.local_model = settings_.local_model;
   problem.hold = settings_.hold;
   problem.ratio = settings_.ratio;
-  Eigen::LDLT<Eigen::MatrixXd> ldlt(slot.normal_compliance);
-  problem.stiffness = ldlt.solve(Eigen::MatrixXd::Identity(m, m));
-  problem.stiffness = 0.5 * (problem.stiffness + problem.stiffness.transpose()).eval();
+  problem.stiffness = Eigen::LDLT<Eigen::MatrixXd>(slot.normal_compliance).solve(Eigen::MatrixXd::Identity(m, m));
   if (slot.update.damping.size()) problem.damping = normals.transpose() * slot.update.damping * normals;
   const LocalModelGains start = slots_[newest_].gains;
   slot.selection = select_gains(problem, settings_.selection, &start);
@@ -97,16 +94,15 @@ const std::vector<ContactOutput>& HapticLoop::tick(const std::vector<Eigen::Vect
 
   const FrameSlot& newest = slots_[newest_];
   const FrameSlot& previous = slots_[previous_];
-  const double t = settings_.hold == HoldKind::zoh ? 1.0 : static_cast<double>(i) / n;
+  const double t = hold_weight(settings_.hold, i, n);
   for (int c = 0; c < contacts_; ++c) {
     if (settings_.hold == HoldKind::zoh)
       held_[c] = newest.update.frames[c];
     else
       interpolate(previous.update.frames[c], newest.update.frames[c], t, held_[c]);
-    const ContactPoint point = locate(held_[c], devices[c]);
-    penetration_(c) = point.penetration;
-    reference_(c) = previous.normal_force(c) + t * (newest.normal_force(c) - previous.normal_force(c));
+    penetration_(c) = locate(held_[c], devices[c]).penetration;
   }
+  apply_hold(settings_.hold, i, n, newest.normal_force, previous.normal_force, reference_);
   const Eigen::VectorXd& force = local_model_.step(penetration_, zeros_, reference_);
   const Eigen::VectorXd& predicted = local_model_.predicted_penetration();
 
@@ -136,14 +132,16 @@ const std::vector<ContactOutput>& HapticLoop::tick(const std::vector<Eigen::Vect
 
 const std::vector<ContactOutput>& LockstepSession::tick(const std::vector<Eigen::Vector3d>& devices) {
   const std::vector<ContactOutput>& out = loop_.tick(devices);
-  if (loop_.decimated()) {
-    FrameSlot& slot = loop_.pending_slot();
-    environment_.solve(loop_.samples(), loop_.frame(), slot.update);
-    for (int c = 0; c < loop_.contacts(); ++c) slot.normal_force(c) = loop_.samples()[c].normal_force;
-    loop_.prepare(slot);
-    loop_.publish();
-  }
+  if (loop_.decimated()) answer();
   return out;
+}
+
+void LockstepSession::answer() {
+  FrameSlot& slot = loop_.pending_slot();
+  environment_.solve(loop_.samples(), loop_.frame(), slot.update);
+  for (int c = 0; c < loop_.contacts(); ++c) slot.normal_force(c) = loop_.samples()[c].normal_force;
+  loop_.prepare(slot);
+  loop_.publish();
 }
 
 EnvironmentUpdate initial_update(Environment& environment) {

@@ -119,6 +119,8 @@ class LockstepSession {
  public:
   LockstepSession(HapticLoop& loop, Environment& environment) : loop_(loop), environment_(environment) {}
   const std::vector<ContactOutput>& tick(const std::vector<Eigen::Vector3d>& devices);
+  // The producer side alone, after a tick that decimated: solve, prepare, publish.
+  void answer();
 
  private:
   HapticLoop& loop_;

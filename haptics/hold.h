@@ -13,14 +13,18 @@ namespace fetouch::haptics {
 
 enum class HoldKind { zoh, foh };
 
+// The weight of the newest value at tick i of a frame: 1 for ZOH, i / N for FOH.
+inline double hold_weight(HoldKind kind, int tick_in_frame, int ratio) noexcept {
+  return kind == HoldKind::zoh ? 1.0 : static_cast<double>(tick_in_frame) / static_cast<double>(ratio);
+}
+
 // Writes the held value into `out` (no allocation once `out` has the right size).
 inline void apply_hold(HoldKind kind, int tick_in_frame, int ratio, const Eigen::VectorXd& newest,
                        const Eigen::VectorXd& previous, Eigen::VectorXd& out) noexcept {
   if (kind == HoldKind::zoh) {
     out = newest;
   } else {
-    const double t = static_cast<double>(tick_in_frame) / static_cast<double>(ratio);
-    out = previous + t * (newest - previous);
+    out = previous + hold_weight(kind, tick_in_frame, ratio) * (newest - previous);
   }
 }
 

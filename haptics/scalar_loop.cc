@@ -6,11 +6,13 @@
 #include <cmath>
 #include <complex>
 
+#include "haptics/stability_analysis.h"
+
 namespace fetouch::haptics {
 
 namespace {
 
-using SmallMatrix = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, 5, 5>;
+using SmallMatrix = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, 4, 4>;
 
 double quadratic_max_root_modulus(double a2, double a1, double a0) {
   const double disc = a1 * a1 - 4 * a2 * a0;
@@ -188,17 +190,12 @@ double recurrence_spectral_radius(const ScalarLoop& p) {
 }
 
 double scalar_spectral_radius(const ScalarLoop& p) {
-  const double k = p.stiffness, b = p.damping, kh = p.gains.proportional;
-  const double i = p.gains.integral, n = p.ratio;
-  switch (p.local_model) {
-    case LocalModelKind::p:
-      if (p.hold == HoldKind::zoh) return std::abs((kh - b) / (k + b));
-      return quadratic_max_root_modulus(k + b, -b, kh);
-    case LocalModelKind::pi:
-      if (p.hold == HoldKind::zoh) return quadratic_max_root_modulus(k + b, kh - k - 2 * b, b - kh + n * i);
-      return cubic_max_root_modulus(k + b, -(k + 2 * b), kh + b + i * (n - 1) / 2, i * (n + 1) / 2 - kh);
-    default:
-      return recurrence_spectral_radius(p);
+  double c[4];
+  switch (closed_form_coefficients(p.local_model, p.hold, p.ratio, p.stiffness, p.damping, p.gains, c)) {
+    case 2: return std::abs(c[1] / c[0]);
+    case 3: return quadratic_max_root_modulus(c[0], c[1], c[2]);
+    case 4: return cubic_max_root_modulus(c[0], c[1], c[2], c[3]);
+    default: return recurrence_spectral_radius(p);
   }
 }
 

@@ -91,21 +91,33 @@ StabilityResult analyse(const LoopParameters& p) {
   return result;
 }
 
+int closed_form_coefficients(LocalModelKind kind, HoldKind hold, int ratio, double k0, double b0,
+                             const LocalModelGains& gains, double c[4]) noexcept {
+  const double kh = gains.proportional, i = gains.integral, n = ratio;
+  const auto set = [c](std::initializer_list<double> values) {
+    int count = 0;
+    for (double v : values) c[count++] = v;
+    return count;
+  };
+  switch (kind) {
+    case LocalModelKind::p:
+      if (hold == HoldKind::zoh) return set({k0 + b0, kh - b0});
+      return set({k0 + b0, -b0, kh});
+    case LocalModelKind::pi:
+      if (hold == HoldKind::zoh) return set({k0 + b0, kh - k0 - 2 * b0, b0 - kh + n * i});
+      return set({k0 + b0, -(k0 + 2 * b0), kh + b0 + i * (n - 1) / 2, i * (n + 1) / 2 - kh});
+    default:
+      return 0;
+  }
+}
+
 std::vector<double> characteristic_polynomial(const LoopParameters& p) {
   if (p.stiffness.rows() != 1)
     throw std::invalid_argument("closed forms exist for one contact (scalar K0, B0) only");
-  const double k0 = p.stiffness(0, 0), b0 = p.damping(0, 0), kh = p.gains.proportional;
-  const double ni = p.ratio * p.gains.integral, i = p.gains.integral, n = p.ratio;
-  switch (p.local_model) {
-    case LocalModelKind::p:
-      if (p.hold == HoldKind::zoh) return {k0 + b0, kh - b0};
-      return {k0 + b0, -b0, kh};
-    case LocalModelKind::pi:
-      if (p.hold == HoldKind::zoh) return {k0 + b0, kh - k0 - 2 * b0, b0 - kh + ni};
-      return {k0 + b0, -(k0 + 2 * b0), kh + b0 + i * (n - 1) / 2, i * (n + 1) / 2 - kh};
-    default:
-      throw std::invalid_argument("no closed form for the Smith-predictor local models");
-  }
+  double c[4];
+  const int count = closed_form_coefficients(p.local_model, p.hold, p.ratio, p.stiffness(0, 0), p.damping(0, 0), p.gains, c);
+  if (count == 0) throw std::invalid_argument("no closed form for the Smith-predictor local models");
+  return std::vector<double>(c, c + count);
 }
 
 std::vector<std::complex<double>> polynomial_roots(const std::vector<double>& c) {

@@ -57,6 +57,11 @@ StabilityResult analyse(const LoopParameters& parameters);
 // and the P/PI local models with either hold; throws for the Smith variants or matrix parameters.
 std::vector<double> characteristic_polynomial(const LoopParameters& parameters);
 
+// The same coefficients without allocation, for inner loops: writes them to `c` and returns how
+// many there are (2 to 4), or 0 for the Smith variants, which have no closed form here.
+int closed_form_coefficients(LocalModelKind kind, HoldKind hold, int ratio, double k0, double b0,
+                             const LocalModelGains& gains, double c[4]) noexcept;
+
 // Roots of a polynomial (highest power first) of degree 1 to 3: closed forms for degrees 1 and 2,
 // the companion matrix for 3.
 std::vector<std::complex<double>> polynomial_roots(const std::vector<double>& coefficients);

@@ -144,6 +144,10 @@ int run_solve(const SolveOptions& o) {
 
   const fs::path dir = o.out.empty() ? fs::path("fetouch-solve") / scene.name : fs::path(o.out);
   const fs::path vtu = dir / (scene.name + ".vtu"), pvd = dir / (scene.name + ".pvd"), summary = dir / "summary.json";
+  // The summary is computed once (it assembles to get the reactions) for the file and stdout.
+  std::ostringstream json;
+  write_json(json, o, scene, *model, report, seconds, patches, vtu, pvd);
+  json << "\n";
   try {
     fs::create_directories(dir);
     if (report.converged) {
@@ -155,16 +159,14 @@ int run_solve(const SolveOptions& o) {
       if (!p) throw std::runtime_error("cannot write " + pvd.string());
     }
     std::ofstream s(summary);
-    write_json(s, o, scene, *model, report, seconds, patches, vtu, pvd);
-    s << "\n";
+    s << json.str();
     if (!s) throw std::runtime_error("cannot write " + summary.string());
   } catch (const std::exception& e) {
     std::cerr << "error: " << e.what() << "\n";
     return kExitFailure;
   }
   if (o.json) {
-    write_json(std::cout, o, scene, *model, report, seconds, patches, vtu, pvd);
-    std::cout << "\n";
+    std::cout << json.str();
   } else {
     std::cout << scene.name << ": " << (report.converged ? "converged" : "FAILED") << " in " << report.total_iterations
               << " Newton iterations (" << report.cuts << " load-step cuts), " << std::setprecision(3) << seconds << " s, "

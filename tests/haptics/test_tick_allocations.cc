@@ -52,6 +52,7 @@ long count_tick_allocations(LocalModelKind kind, HoldKind hold, int contacts) {
   for (int c = 0; c + 1 < contacts; ++c) k0(3 * c + 2, 3 * c + 5) = k0(3 * c + 5, 3 * c + 2) = -150;
   LinearSurfaceEnvironment environment(rest, k0, k0 * 0.05);
   HapticLoop loop(settings, initial_update(environment));
+  LockstepSession session(loop, environment);
   std::vector<Eigen::Vector3d> devices(contacts);
   long counted = 0;
   for (int k = 0; k < 50 * 30; ++k) {
@@ -63,13 +64,7 @@ long count_tick_allocations(LocalModelKind kind, HoldKind hold, int contacts) {
     loop.tick(devices);
     armed = false;
     counted += allocations;
-    if (loop.decimated()) {  // the producer side, unarmed
-      FrameSlot& slot = loop.pending_slot();
-      environment.solve(loop.samples(), loop.frame(), slot.update);
-      for (int c = 0; c < contacts; ++c) slot.normal_force(c) = loop.samples()[c].normal_force;
-      loop.prepare(slot);
-      loop.publish();
-    }
+    if (loop.decimated()) session.answer();  // the producer side, unarmed
   }
   return counted;
 }

@@ -1,0 +1,31 @@
+#include "fem/mpi_session.h"
+
+#include <deal.II/base/mpi.h>
+#include <unistd.h>
+
+#include <cstdlib>
+#include <string>
+
+namespace fetouch::fem {
+
+struct MpiSession::Mpi {
+  dealii::Utilities::MPI::MPI_InitFinalize init;
+  Mpi(int& argc, char**& argv) : init(argc, argv, 1) {}
+};
+
+MpiSession::MpiSession(int& argc, char**& argv) {
+  if (!std::getenv("OMPI_MCA_orte_tmpdir_base")) {
+    directory_ = std::filesystem::temp_directory_path() / ("fetouch_mpi_" + std::to_string(::getpid()));
+    std::filesystem::create_directories(directory_);
+    setenv("OMPI_MCA_orte_tmpdir_base", directory_.c_str(), 1);
+  }
+  mpi_ = std::make_unique<Mpi>(argc, argv);
+}
+
+MpiSession::~MpiSession() {
+  mpi_.reset();  // MPI_Finalize before the directory goes
+  std::error_code ignored;
+  if (!directory_.empty()) std::filesystem::remove_all(directory_, ignored);
+}
+
+}  // namespace fetouch::fem
