@@ -9,7 +9,9 @@
 // backtracking line search on the residual norm, and automatic load-step cutting: a step whose
 // Newton fails (no convergence, or J <= 0 at a quadrature point, i.e. an inverted element) is rolled
 // back to the last converged state and retried with half the increment, down to a minimum.
-// Linear systems: PETSc's MUMPS (Cholesky-type symmetric factorisation) through deal.II.
+// Linear systems: conjugate gradients on the current tangent, preconditioned by a MUMPS Cholesky
+// factorisation of an earlier one, refactored when it no longer fits (fem/tangent_system.h); so a
+// frame that moves the state a little factorises nothing, and Newton keeps its convergence.
 //
 // Elements: P1/P2 on tetrahedra, Q1/Q2 on hexahedra, chosen from the triangulation's cells and the
 // degree. One MPI rank for now (PETSc objects on MPI_COMM_SELF; MPI must be initialised, by a
@@ -52,13 +54,24 @@ struct SolveReport {
   int cuts = 0;
   std::vector<StepReport> steps;  // every attempt, the failed ones included
   std::string failure;
-  // Time per phase, seconds: assembly (residual and tangent), factorisation, triangular solves.
+  // Time per phase, seconds: assembly (residual and tangent), factorisation, linear solves.
   double assembly_s = 0, factorisation_s = 0, solve_s = 0;
+  int linear_iterations = 0;  // CG iterations preconditioned by an earlier factorisation
+  int factorisations = 0;
 };
 
 struct ComplianceTimes {
   double assembly_s = 0, factorisation_s = 0, solves_s = 0;
+  int linear_iterations = 0, factorisations = 0;
+  double galerkin_residual = 0;  // of the last columns' Galerkin update (0: none)
+  bool refined = false;          // the columns were solved again
 };
+
+// The relative residual to which compliance columns K^-1 h are solved.
+inline constexpr double kComplianceTolerance = 1e-9;
+// The largest relative residual of a Galerkin-updated column accepted without a new solve: the
+// error of W is then of the order of its square, 1e-6 relative.
+inline constexpr double kGalerkinTolerance = 1e-3;
 
 class QuasiStaticSolver {
  public:
@@ -107,8 +120,11 @@ class QuasiStaticSolver {
   dealii::Tensor<1, 3> patch_normal(int patch) const;
   int patches() const;
   // The condensed compliance at the current state: W = H K^-1 H' (3m x 3m, m/N; row/column 3a + c
-  // is patch a, component c), K the consistent tangent with the supports. One factorisation, 3m
-  // solves. Symmetric positive definite when the body is supported.
+  // is patch a, component c), K the consistent tangent with the supports (after a converged solve,
+  // the one Newton ended with: no new assembly). The 3m columns K^-1 h are solved to
+  // kComplianceTolerance, or, when the last compliance's columns still span them (a Galerkin
+  // update with residual under kGalerkinTolerance), updated without a solve. Symmetric positive
+  // definite when the body is supported.
   dealii::FullMatrix<double> compliance();
   const ComplianceTimes& last_compliance_times() const;
 

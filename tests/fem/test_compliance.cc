@@ -123,5 +123,59 @@ TEST(Compliance, SymmetricPositiveDefiniteAndCouplingDecaysWithDistance) {
   }
 }
 
+// A haptic frame: the forces change by 1 %, the solve starts from the linear prediction and runs CG
+// on the old factorisation, and W comes from the Galerkin update of the last columns without a
+// solve. Both must equal a second solver that reaches the same loads from scratch and computes W
+// with fresh solves: the state to Newton's tolerance, W to the Galerkin error bound.
+TEST(Compliance, FrameUpdateMatchesAFreshSolve) {
+  dealii::Triangulation<3> tria;
+  make_block(tria);
+  const NeoHookean material(lame_lambda(5000, 0.45), lame_mu(5000, 0.45));
+  const auto make = [&](QuasiStaticSolver& solver) {
+    solver.prescribe_displacement(4, {true, true, true}, Tensor<1, 3>());
+    solver.add_contact_patch(Point<3>(0.035, 0.04, 0.05), 0.012);
+    solver.add_contact_patch(Point<3>(0.065, 0.04, 0.05), 0.012);
+  };
+  NewtonSettings settings;
+  settings.relative_tolerance = 1e-10;
+  QuasiStaticSolver framed(tria, material, 1), fresh(tria, material, 1);
+  make(framed);
+  make(fresh);
+  framed.set_patch_force(0, press(0.3));
+  framed.set_patch_force(1, press(0.3));
+  ASSERT_TRUE(framed.solve(settings).converged);
+  framed.compliance();
+  framed.set_patch_force(0, press(0.303));
+  const SolveReport frame = framed.solve(settings);
+  ASSERT_TRUE(frame.converged);
+  EXPECT_EQ(frame.factorisations, 0) << "the old factorisation preconditions the frame";
+  const dealii::FullMatrix<double> w_framed = framed.compliance();
+  EXPECT_FALSE(framed.last_compliance_times().refined) << "the Galerkin update suffices after 1 %";
+  EXPECT_GT(framed.last_compliance_times().galerkin_residual, 0.0);
+  EXPECT_LE(framed.last_compliance_times().galerkin_residual, kGalerkinTolerance);
+
+  fresh.set_patch_force(0, press(0.303));
+  fresh.set_patch_force(1, press(0.3));
+  NewtonSettings from_scratch = settings;
+  from_scratch.load_steps = 2;
+  ASSERT_TRUE(fresh.solve(from_scratch).converged);
+  const dealii::FullMatrix<double> w_fresh = fresh.compliance();
+
+  for (int p = 0; p < 2; ++p) {
+    const double scale = fresh.patch_displacement(p).norm();
+    EXPECT_LT((framed.patch_displacement(p) - fresh.patch_displacement(p)).norm(), 1e-7 * scale) << "patch " << p;
+  }
+  double worst = 0, largest = 0;
+  for (unsigned int i = 0; i < 6; ++i)
+    for (unsigned int j = 0; j < 6; ++j) {
+      worst = std::max(worst, std::abs(w_framed(i, j) - w_fresh(i, j)));
+      largest = std::max(largest, std::abs(w_fresh(i, j)));
+    }
+  std::printf("frame: %d Newton, %d CG iterations; Galerkin residual %.2e; |W - W_fresh| / |W| = %.2e\n",
+              frame.total_iterations, frame.linear_iterations, framed.last_compliance_times().galerkin_residual,
+              worst / largest);
+  EXPECT_LT(worst, 1e-5 * largest);
+}
+
 }  // namespace
 }  // namespace fetouch::fem

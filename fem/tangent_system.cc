@@ -1,0 +1,209 @@
+#include "fem/tangent_system.h"
+
+#include <petscksp.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <stdexcept>
+#include <string>
+
+namespace fetouch::fem {
+
+namespace {
+
+void check(PetscErrorCode code, const char* what) {
+  if (code != 0) throw std::runtime_error(std::string("PETSc error ") + std::to_string(code) + " in " + what);
+}
+
+double since(std::chrono::steady_clock::time_point start) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+}  // namespace
+
+struct TangentSystem::Petsc {
+  Mat mat = nullptr;
+  KSP ksp = nullptr;
+  PC pc = nullptr;
+  Vec b = nullptr, x = nullptr;
+  bool factored = false;
+  void destroy() {
+    if (ksp) KSPDestroy(&ksp);
+    if (mat) MatDestroy(&mat);
+    if (b) VecDestroy(&b);
+    if (x) VecDestroy(&x);
+    ksp = nullptr, mat = nullptr, b = nullptr, x = nullptr, pc = nullptr;
+    factored = false;
+  }
+  ~Petsc() { destroy(); }
+};
+
+TangentSystem::TangentSystem() : petsc_(std::make_unique<Petsc>()) {}
+
+TangentSystem::~TangentSystem() = default;
+
+std::size_t TangentSystem::rows() const { return row_start_.empty() ? 0 : row_start_.size() - 1; }
+
+void TangentSystem::set_pattern(std::vector<int> row_start, std::vector<int> columns) {
+  petsc_->destroy();
+  row_start_ = std::move(row_start);
+  columns_ = std::move(columns);
+  values_.assign(columns_.size(), 0.0);
+  const int n = static_cast<int>(rows());
+  diagonal_.resize(n);
+  for (int i = 0; i < n; ++i) diagonal_[i] = position(i, i);
+  Petsc& p = *petsc_;
+  // PETSc works on these arrays in place: assembly writes values_, PETSc reads them.
+  check(MatCreateSeqAIJWithArrays(PETSC_COMM_SELF, n, n, row_start_.data(), columns_.data(), values_.data(), &p.mat),
+        "creating the tangent matrix");
+  check(VecCreateSeqWithArray(PETSC_COMM_SELF, 1, n, nullptr, &p.b), "creating a vector");
+  check(VecCreateSeqWithArray(PETSC_COMM_SELF, 1, n, nullptr, &p.x), "creating a vector");
+  // CHOLMOD's own messages (a matrix that is not positive definite) would reach the terminal.
+  PetscBool set = PETSC_FALSE;
+  check(PetscOptionsHasName(nullptr, nullptr, "-mat_cholmod_print", &set), "reading options");
+  if (!set) check(PetscOptionsSetValue(nullptr, "-mat_cholmod_print", "0"), "quietening CHOLMOD");
+  create_solver(MATSOLVERCHOLMOD);
+  refactor_ = true;
+}
+
+// CHOLMOD (supernodal LL') by default: in this use, where factorisations are rare and applications
+// many, its triangular solves take half MUMPS's time (bench/bench_fem_frame.cc). It needs K positive
+// definite; a tangent that is not (past a limit point) falls back to MUMPS's LDL'.
+void TangentSystem::create_solver(const char* type) {
+  Petsc& p = *petsc_;
+  if (p.ksp) KSPDestroy(&p.ksp);
+  p.factored = false;
+  check(KSPCreate(PETSC_COMM_SELF, &p.ksp), "creating the solver");
+  check(KSPSetType(p.ksp, KSPCG), "choosing CG");
+  check(KSPSetNormType(p.ksp, KSP_NORM_UNPRECONDITIONED), "choosing the residual norm");
+  check(KSPGetPC(p.ksp, &p.pc), "getting the preconditioner");
+  check(PCSetType(p.pc, PCCHOLESKY), "choosing Cholesky");
+  check(PCFactorSetMatSolverType(p.pc, type), "choosing the factorisation");
+  check(KSPSetOperators(p.ksp, p.mat, p.mat), "setting the operator");
+  check(KSPSetFromOptions(p.ksp), "reading PETSC_OPTIONS");
+  solver_type_ = type;
+}
+
+int TangentSystem::position(int row, int column) const {
+  const int* begin = columns_.data() + row_start_[row];
+  const int* end = columns_.data() + row_start_[row + 1];
+  const int* at = std::lower_bound(begin, end, column);
+  if (at == end || *at != column)
+    throw std::logic_error("tangent: entry (" + std::to_string(row) + ", " + std::to_string(column) +
+                           ") is outside the sparsity pattern");
+  return static_cast<int>(at - columns_.data());
+}
+
+void TangentSystem::zero() { std::fill(values_.begin(), values_.end(), 0.0); }
+
+void TangentSystem::finish(const std::vector<bool>& constrained) {
+  const int n = static_cast<int>(rows());
+  double sum = 0;
+  int free = 0;
+  for (int i = 0; i < n; ++i)
+    if (!constrained[i]) sum += std::abs(values_[diagonal_[i]]), ++free;
+  const double scale = free > 0 && sum > 0 ? sum / free : 1.0;
+  for (int i = 0; i < n; ++i)
+    if (constrained[i]) values_[diagonal_[i]] = scale;
+  // Tells PETSc the values changed (they were written in place).
+  check(MatAssemblyBegin(petsc_->mat, MAT_FINAL_ASSEMBLY), "assembling the tangent");
+  check(MatAssemblyEnd(petsc_->mat, MAT_FINAL_ASSEMBLY), "assembling the tangent");
+}
+
+void TangentSystem::multiply(const double* x, double* y) const {
+  const int n = static_cast<int>(rows());
+  for (int i = 0; i < n; ++i) {
+    double sum = 0;
+    for (int k = row_start_[i]; k < row_start_[i + 1]; ++k) sum += values_[k] * x[columns_[k]];
+    y[i] = sum;
+  }
+}
+
+void TangentSystem::factor(SolveStats& stats) {
+  Petsc& p = *petsc_;
+  const auto start = std::chrono::steady_clock::now();
+  check(PCSetReusePreconditioner(p.pc, PETSC_FALSE), "refactorising");
+  // CHOLMOD reports a K that is not positive definite as an error: caught quietly, then LDL'.
+  PetscPushErrorHandler(PetscReturnErrorHandler, nullptr);
+  PetscErrorCode code = KSPSetUp(p.ksp);  // the first time
+  if (code == 0) code = PCSetUp(p.pc);    // later: K's values changed
+  PetscPopErrorHandler();
+  PCFailedReason failed = PC_NOERROR;
+  if (code == 0) check(PCGetFailedReason(p.pc, &failed), "checking the factorisation");
+  if ((code != 0 || failed != PC_NOERROR) && std::string(solver_type_) != MATSOLVERMUMPS) {
+    create_solver(MATSOLVERMUMPS);
+    check(KSPSetUp(p.ksp), "factorising the tangent");
+    check(PCGetFailedReason(p.pc, &failed), "checking the factorisation");
+  } else {
+    check(code, "factorising the tangent");
+  }
+  if (failed != PC_NOERROR) throw std::runtime_error("the tangent stiffness is singular (factorisation failed)");
+  // Later solves keep this factorisation as the preconditioner while K changes.
+  check(PCSetReusePreconditioner(p.pc, PETSC_TRUE), "keeping the factorisation");
+  p.factored = true;
+  refactor_ = false;
+  ++factorisations_;
+  stats.refactored = true;
+  stats.factor_s += since(start);
+}
+
+TangentSystem::SolveStats TangentSystem::solve(const double* b, double* x, double tolerance, bool zero_guess) {
+  Petsc& p = *petsc_;
+  SolveStats stats;
+  const int n = static_cast<int>(rows());
+  if (zero_guess) std::fill(x, x + n, 0.0);
+  check(VecPlaceArray(p.b, b), "wrapping the right-hand side");
+  check(VecPlaceArray(p.x, x), "wrapping the solution");
+  struct Unplace {
+    Petsc& p;
+    ~Unplace() { VecResetArray(p.b), VecResetArray(p.x); }
+  } unplace{p};
+  const auto direct = [&] {
+    const auto start = std::chrono::steady_clock::now();
+    check(PCApply(p.pc, p.b, p.x), "solving with the factorisation");
+    stats.solve_s += since(start);
+  };
+  if (!p.factored || refactor_) {
+    factor(stats);
+    direct();
+    return stats;
+  }
+  const auto start = std::chrono::steady_clock::now();
+  check(KSPSetInitialGuessNonzero(p.ksp, PETSC_TRUE), "setting the initial guess");
+  check(KSPSetTolerances(p.ksp, tolerance, 0.0, 1e30, max_cg_iterations), "setting tolerances");
+  check(KSPSolve(p.ksp, p.b, p.x), "conjugate gradients");
+  KSPConvergedReason reason;
+  PetscInt iterations;
+  check(KSPGetConvergedReason(p.ksp, &reason), "checking convergence");
+  check(KSPGetIterationNumber(p.ksp, &iterations), "counting iterations");
+  stats.iterations = static_cast<int>(iterations);
+  stats.solve_s += since(start);
+  if (reason > 0) {
+    if (iterations > refactor_after_iterations) refactor_ = true;
+    return stats;
+  }
+  // The factorisation has drifted too far from K (or K lost definiteness): refactor, solve directly.
+  factor(stats);
+  direct();
+  return stats;
+}
+
+TangentSystem::SolveStats TangentSystem::apply_factorisation(const double* b, double* x, int columns) {
+  Petsc& p = *petsc_;
+  SolveStats stats;
+  if (!p.factored || refactor_) factor(stats);
+  const auto start = std::chrono::steady_clock::now();
+  const int n = static_cast<int>(rows());
+  Mat rhs = nullptr, solution = nullptr;
+  check(MatCreateSeqDense(PETSC_COMM_SELF, n, columns, const_cast<double*>(b), &rhs), "wrapping right-hand sides");
+  check(MatCreateSeqDense(PETSC_COMM_SELF, n, columns, x, &solution), "wrapping solutions");
+  const PetscErrorCode code = PCMatApply(p.pc, rhs, solution);
+  MatDestroy(&rhs);
+  MatDestroy(&solution);
+  check(code, "applying the factorisation to a block");
+  stats.solve_s += since(start);
+  return stats;
+}
+
+}  // namespace fetouch::fem
