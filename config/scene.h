@@ -62,7 +62,7 @@ enum class MaterialModel {
   linear_elastic,
   saint_venant_kirchhoff,
   neo_hookean,
-  neo_hookean_incompressible,  // mixed u-p formulation, no volumetric locking
+  neo_hookean_incompressible,  // decoupled; effect incompressibility: mean dilatation, no locking
   mooney_rivlin
 };
 

@@ -102,12 +102,26 @@ InvariantDerivatives NeoHookean::derivatives(double i1, double, double j) const 
 
 namespace {
 // U(J) = kappa/4 (J^2 - 1 - 2 ln J) and its first two derivatives.
-void volumetric(double kappa, double j, InvariantDerivatives& r) {
+void volumetric_energy(double kappa, double j, InvariantDerivatives& r) {
   r.psi += kappa / 4 * (j * j - 1 - 2 * std::log(j));
   r.d[2] += kappa / 2 * (j - 1 / j);
   r.h[2][2] += kappa / 2 * (1 + 1 / (j * j));
 }
 }  // namespace
+
+bool NearlyIncompressibleNeoHookean::volumetric(double j, double& u1, double& u2) const {
+  InvariantDerivatives r;
+  volumetric_energy(kappa_, j, r);
+  u1 = r.d[2], u2 = r.h[2][2];
+  return true;
+}
+
+bool MooneyRivlin::volumetric(double j, double& u1, double& u2) const {
+  InvariantDerivatives r;
+  volumetric_energy(kappa_, j, r);
+  u1 = r.d[2], u2 = r.h[2][2];
+  return true;
+}
 
 InvariantDerivatives NearlyIncompressibleNeoHookean::derivatives(double i1, double, double j) const {
   const double j23 = std::pow(j, -2.0 / 3), j53 = j23 / j, j83 = j53 / j;
@@ -116,7 +130,7 @@ InvariantDerivatives NearlyIncompressibleNeoHookean::derivatives(double i1, doub
   r.d = {mu_ / 2 * j23, 0, -mu_ / 3 * j53 * i1};
   r.h[0][2] = r.h[2][0] = -mu_ / 3 * j53;
   r.h[2][2] = 5 * mu_ / 9 * j83 * i1;
-  volumetric(kappa_, j, r);
+  volumetric_energy(kappa_, j, r);
   return r;
 }
 
@@ -128,7 +142,7 @@ InvariantDerivatives MooneyRivlin::derivatives(double i1, double i2, double j) c
   r.h[0][2] = r.h[2][0] = -2.0 / 3 * c10_ * j23 / j;
   r.h[1][2] = r.h[2][1] = -4.0 / 3 * c01_ * j43 / j;
   r.h[2][2] = 10.0 / 9 * c10_ * j23 / (j * j) * i1 + 28.0 / 9 * c01_ * j43 / (j * j) * i2;
-  volumetric(kappa_, j, r);
+  volumetric_energy(kappa_, j, r);
   return r;
 }
 

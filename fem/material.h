@@ -45,6 +45,9 @@ class Material {
   // The small-strain shear modulus and the bulk modulus: for time steps, penalties, scaling.
   virtual double shear_modulus() const = 0;
   virtual double bulk_modulus() const = 0;
+  // For the decoupled models psi = psi_iso(J^-2/3 C) + U(J): U'(J) and U''(J) (the mean-dilatation
+  // formulation replaces U(J) by U of the element's volume ratio). False for the coupled models.
+  virtual bool volumetric(double /*j*/, double& /*u1*/, double& /*u2*/) const { return false; }
 };
 
 class LinearElastic final : public Material {
@@ -107,6 +110,7 @@ class NearlyIncompressibleNeoHookean final : public InvariantMaterial {
   InvariantDerivatives derivatives(double i1, double i2, double j) const override;
   double shear_modulus() const override { return mu_; }
   double bulk_modulus() const override { return kappa_; }
+  bool volumetric(double j, double& u1, double& u2) const override;
 
  private:
   double kappa_, mu_;
@@ -119,6 +123,7 @@ class MooneyRivlin final : public InvariantMaterial {
   InvariantDerivatives derivatives(double i1, double i2, double j) const override;
   double shear_modulus() const override { return 2 * (c10_ + c01_); }
   double bulk_modulus() const override { return kappa_; }
+  bool volumetric(double j, double& u1, double& u2) const override;
 
  private:
   double c10_, c01_, kappa_;

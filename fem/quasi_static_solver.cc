@@ -185,6 +185,8 @@ struct QuasiStaticSolver::Impl {
     Vector<double> external;
   } cache;
 
+  bool mean_dilatation = false;
+
   // Time stepping (enable_dynamics): the state at the start of the step and the step's constants.
   bool dynamic = false;
   QuasiStaticSolver::Dynamics dynamics;
@@ -320,6 +322,7 @@ struct QuasiStaticSolver::Impl {
     Vector<double> cell_internal(n);
     std::vector<double> u_local(n);
     std::vector<std::array<Tensor<1, 3>, 3>> a_grad(n);
+    std::vector<double> volume_gradient(mean_dilatation ? n : 0);
     Tensor2 P;
     Tensor4 A;
     for (unsigned int k = begin; k < end; ++k) {
@@ -327,10 +330,46 @@ struct QuasiStaticSolver::Impl {
       gather(k, u, u_local);
       cell_matrix = 0;
       cell_internal = 0;
+      // Mean dilatation: U(J) becomes U(theta) of the cell's volume ratio theta = v / V, its
+      // pressure p = U'(theta) constant over the cell (the displacement-pressure formulation with a
+      // pressure constant per cell, condensed).
+      double reference_volume = 0, pressure = 0, pressure_stiffness = 0;
+      if (mean_dilatation) {
+        double volume = 0;
+        for (unsigned int q = 0; q < nq; ++q) {
+          const double jxw = c.jxw[std::size_t(k) * nq + q];
+          const double j = determinant(deformation_gradient(k, q, u_local));
+          if (!(j > 0)) return false;
+          volume += j * jxw;
+          reference_volume += jxw;
+        }
+        material.volumetric(volume / reference_volume, pressure, pressure_stiffness);
+        std::fill(volume_gradient.begin(), volume_gradient.end(), 0.0);
+      }
       for (unsigned int q = 0; q < nq; ++q) {
         const Tensor<1, 3>* grad = &c.gradients[(std::size_t(k) * nq + q) * c.nbase];
         const double jxw = c.jxw[std::size_t(k) * nq + q];
-        if (!material.evaluate(deformation_gradient(k, q, u_local), P, tangent ? &A : nullptr)) return false;
+        const Tensor2 F = deformation_gradient(k, q, u_local);
+        if (!material.evaluate(F, P, tangent ? &A : nullptr)) return false;
+        if (mean_dilatation) {
+          // Swap the point's volumetric stress U'(J) J F^-T for the cell's p J F^-T, and in the
+          // tangent U''(J) J^2 F^-T x F^-T + U'(J) d2J for p d2J, d2J = J (F^-T x F^-T - F^-T o F^-1).
+          const double j = determinant(F);
+          const Tensor2 f_inv_t = transpose(invert(F));
+          double u1 = 0, u2 = 0;
+          material.volumetric(j, u1, u2);
+          const double excess = u1 - pressure;
+          P -= excess * j * f_inv_t;
+          if (tangent)
+            for (int a = 0; a < 3; ++a)
+              for (int b = 0; b < 3; ++b)
+                for (int cc = 0; cc < 3; ++cc)
+                  for (int d = 0; d < 3; ++d)
+                    A[a][b][cc][d] -= u2 * j * j * f_inv_t[a][b] * f_inv_t[cc][d] +
+                                      excess * j * (f_inv_t[a][b] * f_inv_t[cc][d] - f_inv_t[a][d] * f_inv_t[cc][b]);
+          for (unsigned int i = 0; i < n; ++i)  // dv/du_i = int J F^-T : grad N_i
+            volume_gradient[i] += j * (f_inv_t[c.component[i]] * grad[c.base[i]]) * jxw;
+        }
         if (tangent)  // a_grad[j][c] = A[c][.][c_j][.] grad phi_j, so that K_ij = grad phi_i . a_grad[j][c_i]
           for (unsigned int j = 0; j < n; ++j) {
             const Tensor<1, 3>& g = grad[c.base[j]];
@@ -348,6 +387,11 @@ struct QuasiStaticSolver::Impl {
           if (!tangent) continue;
           for (unsigned int j = 0; j < n; ++j) cell_matrix(i, j) += g * a_grad[j][ci];
         }
+      }
+      if (mean_dilatation && tangent) {  // U''(theta)/V (dv/du)(dv/du)'
+        const double scale = pressure_stiffness / reference_volume;
+        for (unsigned int i = 0; i < n; ++i)
+          for (unsigned int j = 0; j < n; ++j) cell_matrix(i, j) += scale * volume_gradient[i] * volume_gradient[j];
       }
       if (dynamic) {
         // M (a+ + alpha v+) with the consistent mass, and its derivative in the tangent.
@@ -779,6 +823,14 @@ FullMatrix<double> QuasiStaticSolver::compliance() {
   for (unsigned int a = 0; a < columns; ++a)
     for (unsigned int b = 0; b < a; ++b) w(a, b) = w(b, a) = (w(a, b) + w(b, a)) / 2;
   return w;
+}
+
+void QuasiStaticSolver::use_mean_dilatation(bool on) {
+  double u1 = 0, u2 = 0;
+  if (on && !impl_->material.volumetric(1.0, u1, u2))
+    throw std::invalid_argument("the mean-dilatation formulation needs a decoupled material (neo_hookean_incompressible "
+                                "or mooney_rivlin), not " + impl_->material.name());
+  impl_->mean_dilatation = on;
 }
 
 void QuasiStaticSolver::enable_dynamics(const Dynamics& dynamics) {

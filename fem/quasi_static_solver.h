@@ -92,6 +92,13 @@ class QuasiStaticSolver {
 
   SolveReport solve(const NewtonSettings& settings);
 
+  // Nearly incompressible tissue without volumetric locking: the volumetric energy U(J) of a
+  // decoupled material is taken of each cell's volume ratio theta = (1/V) int J dV instead of J
+  // pointwise, i.e. a displacement-pressure formulation with the pressure constant per cell,
+  // condensed (Q1/P0, P2/P0; Simo, Taylor and Pister's mean dilatation). Throws
+  // std::invalid_argument for a coupled material. (P1 tetrahedra have one point: no change.)
+  void use_mean_dilatation(bool on);
+
   // Inertia (and mass-proportional Rayleigh damping C = alpha M): once enabled, each solve() is one
   // time step of length dt, R(u) + M (a + alpha v) = 0 at the new time, with
   //   Newmark (beta, gamma):  a+ = (u+ - u - dt v)/(beta dt^2) - (1 - 2 beta)/(2 beta) a,

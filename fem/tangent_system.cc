@@ -1,5 +1,6 @@
 #include "fem/tangent_system.h"
 
+#include <dlfcn.h>
 #include <petscksp.h>
 
 #include <algorithm>
@@ -18,6 +19,21 @@ void check(PetscErrorCode code, const char* what) {
 
 double since(std::chrono::steady_clock::time_point start) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+// One thread inside the libraries: CHOLMOD's OpenMP and OpenBLAS's threads would compete with the
+// solver's own assembly thread and the haptic thread for the 2 cores. Measured: a frame at 12,240
+// DOFs 84 -> 73 ms, and a solve while another process is busy 18 s -> 1.3 s (OpenMP barriers that
+// sleep). Found at run time: the functions exist only where the libraries were built with threads.
+// OpenMP's setting is per thread: called by every thread that builds a system (and solves with it).
+void limit_library_threads() {
+  thread_local const bool done = [] {
+    using SetThreads = void (*)(int);
+    if (auto omp = reinterpret_cast<SetThreads>(dlsym(RTLD_DEFAULT, "omp_set_num_threads"))) omp(1);
+    if (auto blas = reinterpret_cast<SetThreads>(dlsym(RTLD_DEFAULT, "openblas_set_num_threads"))) blas(1);
+    return true;
+  }();
+  (void)done;
 }
 
 }  // namespace
@@ -39,7 +55,7 @@ struct TangentSystem::Petsc {
   ~Petsc() { destroy(); }
 };
 
-TangentSystem::TangentSystem() : petsc_(std::make_unique<Petsc>()) {}
+TangentSystem::TangentSystem() : petsc_(std::make_unique<Petsc>()) { limit_library_threads(); }
 
 TangentSystem::~TangentSystem() = default;
 
@@ -121,6 +137,7 @@ void TangentSystem::multiply(const double* x, double* y) const {
 }
 
 void TangentSystem::factor(SolveStats& stats) {
+  limit_library_threads();
   Petsc& p = *petsc_;
   const auto start = std::chrono::steady_clock::now();
   check(PCSetReusePreconditioner(p.pc, PETSC_FALSE), "refactorising");

@@ -81,6 +81,12 @@ std::unique_ptr<TissueModel> build_tissue_model(const config::Scene& scene) {
     for (int d = 0; d < 3; ++d) weight[d] = scene.material.density_kg_per_m3 * scene.effects.gravity_m_per_s2[d];
     model->solver->apply_body_force([weight](const dealii::Point<3>&) { return weight; });
   }
+  if (scene.effects.has(config::Effect::incompressibility)) {
+    // The mean-dilatation formulation; a coupled material has no volumetric part to take per cell
+    // (the scene loader warned), and keeps the displacement formulation.
+    double u1 = 0, u2 = 0;
+    if (model->material->volumetric(1.0, u1, u2)) model->solver->use_mean_dilatation(true);
+  }
   model->newton.relative_tolerance = scene.solver.newton_relative_tolerance;
   model->newton.absolute_tolerance = scene.solver.newton_absolute_tolerance;
   model->newton.max_iterations = scene.solver.newton_max_iterations;
