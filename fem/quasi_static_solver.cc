@@ -1,5 +1,6 @@
 #include "fem/quasi_static_solver.h"
 
+#include "fem/cavity.h"
 #include "fem/tangent_system.h"
 
 #include <deal.II/base/function.h>
@@ -30,6 +31,7 @@
 #include <cmath>
 #include <fstream>
 #include <map>
+#include <set>
 #include <limits>
 #include <stdexcept>
 #include <thread>
@@ -129,6 +131,12 @@ struct QuasiStaticSolver::Impl {
     if (set_up) return;
     set_up = true;
     constraints.clear();
+    std::set<types::boundary_id> present;
+    for (const auto& face : tria.active_face_iterators())
+      if (face->at_boundary()) present.insert(face->boundary_id());
+    for (const Prescribed& p : prescribed)
+      if (!present.count(p.boundary))
+        throw std::invalid_argument("prescribed displacement: no boundary face has id " + std::to_string(p.boundary));
     for (const Prescribed& p : prescribed)
       VectorTools::interpolate_boundary_values(*mapping, dof, p.boundary, Functions::ZeroFunction<3>(3), constraints,
                                                ComponentMask({p.components[0], p.components[1], p.components[2]}));
@@ -186,6 +194,99 @@ struct QuasiStaticSolver::Impl {
   } cache;
 
   bool mean_dilatation = false;
+
+  // The fluid-filled cavity (add_cavity), its state at the last assembly, and y = K_s^-1 g for the
+  // Sherman-Morrison solves with K = K_s + c g g' (K_s the sparse part, c = -dp/dV >= 0).
+  struct Cavity {
+    bool active = false;
+    unsigned int boundary = 0;
+    CavityLaw law;
+    CavityWall wall;
+    double reference_volume = 0, stiffness = 0;
+    double pressure = 0;         // an unknown of the solve, beside u
+    double volume_residual = 0;  // V(u) - V_law(p), m^3
+    Vector<double> g, y;
+    bool y_current = false;
+  } cavity;
+
+  void build_cavity_wall() {
+    Cavity& cv = cavity;
+    cv.wall.triangles.clear();
+    std::vector<types::global_dof_index> indices(fe->n_dofs_per_cell());
+    for (const auto& cell : dof.active_cell_iterators())
+      for (const unsigned int f : cell->face_indices()) {
+        const auto face = cell->face(f);
+        if (!face->at_boundary() || face->boundary_id() != cv.boundary) continue;
+        const unsigned int nv = face->n_vertices();
+        cell->get_dof_indices(indices);
+        const auto triangle = [&](unsigned int a, unsigned int b, unsigned int c) {
+          CavityWall::Triangle t;
+          const unsigned int vs[3] = {a, b, c};
+          for (int v = 0; v < 3; ++v) {
+            // The face vertex's index in the cell, then its dof of each component.
+            unsigned int in_cell = 0;
+            while (cell->vertex_index(in_cell) != face->vertex_index(vs[v])) ++in_cell;
+            for (unsigned int d = 0; d < 3; ++d) {
+              t.dofs[v][d] = static_cast<unsigned int>(indices[fe->component_to_system_index(d, in_cell)]);
+              t.position[v][d] = face->vertex(vs[v])[d];
+            }
+          }
+          // Normals out of the cavity, i.e. into this cell.
+          const Point<3> pa = face->vertex(a), pb = face->vertex(b), pc = face->vertex(c);
+          const Tensor<1, 3> normal = cross_product_3d(pb - pa, pc - pa);
+          if (normal * (cell->center() - face->center()) < 0) std::swap(t.dofs[1], t.dofs[2]), std::swap(t.position[1], t.position[2]);
+          cv.wall.triangles.push_back(t);
+        };
+        if (nv == 3) {
+          triangle(0, 1, 2);
+        } else {  // deal.II's quadrilateral vertices 0, 1, 3, 2 go around the face
+          triangle(0, 1, 3);
+          triangle(0, 3, 2);
+        }
+      }
+    if (cv.wall.triangles.empty())
+      throw std::invalid_argument("cavity: no boundary face has the cavity's boundary id " + std::to_string(cv.boundary));
+    const Vector<double> zero(dof.n_dofs());
+    cv.reference_volume = cv.wall.volume(zero.begin());
+    if (!(cv.reference_volume > 0))
+      throw std::invalid_argument("cavity: the surface with boundary id " + std::to_string(cv.boundary) +
+                                  " does not enclose a volume (not closed, or not an inner surface)");
+    cv.g.reinit(dof.n_dofs());
+    cv.y.reinit(dof.n_dofs());
+  }
+
+  // The cavity's load p g into r (and -p g into `internal`), and -p d2V into the tangent, with the
+  // pressure p an unknown beside u, and the law's residual V(u) - V_law(p); false if the cavity
+  // collapsed (V <= 0). (Taking p = p(V(u)) instead, a liquid's stiffness K/V0 ~ 1e13 Pa/m^3
+  // turns any second-order volume error of a step into a huge force: Newton stalls.)
+  bool assemble_cavity(Vector<double>& r, bool with_tangent, Vector<double>* internal) {
+    Cavity& cv = cavity;
+    const double volume = cv.wall.volume(u.begin());
+    if (!(volume > 0)) return false;
+    const double p = cv.pressure;
+    cv.volume_residual = volume - cv.law.volume(p, cv.reference_volume);
+    cv.g = 0;
+    cv.wall.add_gradient(u.begin(), 1.0, cv.g.begin());
+    for (types::global_dof_index i = 0; i < u.size(); ++i) {
+      if (internal) (*internal)[i] -= p * cv.g[i];
+      if (constrained[i]) cv.g[i] = 0;
+      else r[i] += p * cv.g[i];
+    }
+    if (with_tangent) {
+      cv.wall.add_hessian(u.begin(), -p, [&](unsigned int row, unsigned int column, double value) {
+        if (!constrained[row] && !constrained[column]) tangent.add(static_cast<int>(row), static_cast<int>(column), value);
+      });
+      cv.stiffness = -1 / cv.law.volume_derivative(p, cv.reference_volume);  // -dp/dV of the law
+      cv.y_current = false;
+    }
+    return true;
+  }
+
+  // y = K x with the cavity's rank-one part.
+  void multiply(const Vector<double>& x, Vector<double>& y) const {
+    tangent.multiply(x.begin(), y.begin());
+    if (cavity.active && cavity.stiffness != 0) y.add(cavity.stiffness * (cavity.g * x), cavity.g);
+  }
 
   // Time stepping (enable_dynamics): the state at the start of the step and the step's constants.
   bool dynamic = false;
@@ -473,6 +574,7 @@ struct QuasiStaticSolver::Impl {
       if (tangent)
         for (std::size_t i = 0; i < second.values.size(); ++i) values[i] += second.values[i];
     }
+    if (cavity.active && !assemble_cavity(r, tangent, internal)) return false;
     if (tangent) {
       this->tangent.finish(constrained);
       tangent_current = true;
@@ -534,10 +636,22 @@ struct QuasiStaticSolver::Impl {
   // x = K^-1 rhs to a relative residual `tolerance`, x holding the initial guess unless zero_guess.
   void solve_tangent(const Vector<double>& rhs, Vector<double>& x, double tolerance, bool zero_guess) {
     x.reinit(rhs.size(), /*omit_zeroing_entries=*/!zero_guess);
-    const TangentSystem::SolveStats stats = tangent.solve(rhs.begin(), x.begin(), tolerance, zero_guess);
+    TangentSystem::SolveStats stats = tangent.solve(rhs.begin(), x.begin(), tolerance, zero_guess);
     factorisation_s += stats.factor_s;
     solve_s += stats.solve_s;
     linear_iterations += stats.iterations;
+    if (cavity.active && cavity.stiffness != 0) {
+      // Sherman-Morrison: (K_s + c g g')^-1 b = x - c (g.x) / (1 + c g.y) y, x = K_s^-1 b, y = K_s^-1 g.
+      if (!cavity.y_current) {
+        stats = tangent.solve(cavity.g.begin(), cavity.y.begin(), std::min(tolerance, 1e-10), /*zero_guess=*/false);
+        factorisation_s += stats.factor_s;
+        solve_s += stats.solve_s;
+        linear_iterations += stats.iterations;
+        cavity.y_current = true;
+      }
+      const double c = cavity.stiffness;
+      x.add(-c * (cavity.g * x) / (1 + c * (cavity.g * cavity.y)), cavity.y);
+    }
     constraints.distribute(x);
   }
 
@@ -561,7 +675,8 @@ struct QuasiStaticSolver::Impl {
         return report;
       }
       if (reference < 0) reference = norm;
-      if (norm <= s.relative_tolerance * reference || norm <= s.absolute_tolerance) {
+      const bool volume_ok = !cavity.active || std::abs(cavity.volume_residual) <= 1e-10 * cavity.reference_volume;
+      if (volume_ok && (norm <= s.relative_tolerance * reference || norm <= s.absolute_tolerance)) {
         report.converged = true;
         report.iterations = it;
         return report;
@@ -573,6 +688,17 @@ struct QuasiStaticSolver::Impl {
       // aim the step straight at the convergence tolerance.
       const double eta = norm < 5e-2 * reference ? 0.5 * s.relative_tolerance * reference / norm : 1e-3;
       solve_tangent(r, du, std::clamp(eta, 1e-12, 1e-3), /*zero_guess=*/true);
+      // With a cavity, the pressure's step: K_s du - g dp = r, g'du - V_law'(p) dp = -(V - V_law),
+      // i.e. du = x + y dp, dp = -(r_V + g'x) / (g'y + 1/c); solve_tangent gave x + y dp for r_V = 0.
+      double dp = 0;
+      if (cavity.active) {
+        const double c = cavity.stiffness, gy = cavity.g * cavity.y;
+        const double gx = (cavity.g * du) * (1 + c * gy);  // g'x from g'(x + y dp0) = g'x / (1 + c g'y)
+        dp = -(cavity.volume_residual + gx) / (gy + 1 / c);
+        du.add(-cavity.volume_residual / (gy + 1 / c), cavity.y);
+        constraints.distribute(du);
+      }
+      const double pressure_start = cavity.pressure;
       // Backtracking: halve until the residual decreases and no element inverts. The full step is
       // assembled with its tangent, which the next iteration then reuses (one assembly per Newton
       // iteration when the full step is taken, as it is near convergence).
@@ -582,6 +708,7 @@ struct QuasiStaticSolver::Impl {
       for (int b = 0; b < 10 && !accepted; ++b, alpha /= 2) {
         u = start;
         u.add(alpha, du);
+        cavity.pressure = pressure_start + alpha * dp;
         const bool full = b == 0;
         if (!assemble(lambda, trial_r, /*tangent=*/full)) continue;
         accepted = trial_r.l2_norm() < (1 - 1e-4 * alpha) * norm || b == 9;
@@ -592,6 +719,7 @@ struct QuasiStaticSolver::Impl {
       }
       if (!accepted) {
         u = start;
+        cavity.pressure = pressure_start;
         report.failure = "the line search found no admissible step";
         return report;
       }
@@ -765,7 +893,7 @@ FullMatrix<double> QuasiStaticSolver::compliance() {
   for (int round = 0; !solve_columns; ++round) {
     const unsigned int size = basis.size();
     std::vector<Vector<double>> kb(size, Vector<double>(n));
-    for (unsigned int k = 0; k < size; ++k) m.tangent.multiply(basis[k].begin(), kb[k].begin());
+    for (unsigned int k = 0; k < size; ++k) m.multiply(basis[k], kb[k]);
     FullMatrix<double> galerkin(size, size), hb(columns, size);
     for (unsigned int a = 0; a < size; ++a)
       for (unsigned int b = 0; b < size; ++b) galerkin(a, b) = basis[a] * kb[b];
@@ -825,6 +953,32 @@ FullMatrix<double> QuasiStaticSolver::compliance() {
   return w;
 }
 
+void QuasiStaticSolver::add_cavity(unsigned int boundary_id, const CavityLaw& law) {
+  Impl& m = *impl_;
+  if (m.cavity.active) throw std::invalid_argument("cavity: only one cavity per body");
+  if (m.fe->degree != 1)
+    throw std::invalid_argument("cavity: the wall is taken as flat faces between vertices; use P1 or Q1 elements");
+  if (law.gas ? !(law.initial_pressure_pa > 0) : !(law.bulk_modulus_pa > 0))
+    throw std::invalid_argument("cavity: a gas needs a positive initial pressure, a liquid a positive bulk modulus");
+  m.cavity.boundary = boundary_id;
+  m.cavity.law = law;
+  m.build_cavity_wall();
+  m.cavity.pressure = law.initial_pressure_pa;
+  m.cavity.active = true;
+}
+
+double QuasiStaticSolver::cavity_volume() const {
+  const Impl& m = *impl_;
+  return m.cavity.active ? m.cavity.wall.volume(m.u.begin()) : 0.0;
+}
+
+double QuasiStaticSolver::cavity_reference_volume() const { return impl_->cavity.reference_volume; }
+
+double QuasiStaticSolver::cavity_pressure() const {
+  const Impl& m = *impl_;
+  return m.cavity.active ? m.cavity.pressure : 0.0;
+}
+
 void QuasiStaticSolver::use_mean_dilatation(bool on) {
   double u1 = 0, u2 = 0;
   if (on && !impl_->material.volumetric(1.0, u1, u2))
@@ -865,6 +1019,7 @@ double QuasiStaticSolver::l2_error(const std::function<Tensor<1, 3>(const Point<
 SolveReport QuasiStaticSolver::solve(const NewtonSettings& s) {
   impl_->setup_constraints();
   const Vector<double> initial = impl_->u;
+  const double initial_pressure = impl_->cavity.pressure;
   if (impl_->dynamic) impl_->u_old = initial;
   impl_->assembly_s = impl_->factorisation_s = impl_->solve_s = 0;
   impl_->linear_iterations = 0;
@@ -885,6 +1040,7 @@ SolveReport QuasiStaticSolver::solve(const NewtonSettings& s) {
   while (done < 1 - 1e-12) {
     const double target = std::min(1.0, done + increment);
     const Vector<double> last_good = impl_->u;
+    const double last_good_pressure = m.cavity.pressure;
     double reference = -1;
     if (predict) {
       Vector<double> load(m.dof.n_dofs());
@@ -907,6 +1063,7 @@ SolveReport QuasiStaticSolver::solve(const NewtonSettings& s) {
       continue;
     }
     impl_->u = last_good;  // roll back the step
+    m.cavity.pressure = last_good_pressure;
     if (predict) {  // retry the same step from the last converged state
       predict = false;
       impl_->tangent_current = false;
@@ -917,6 +1074,7 @@ SolveReport QuasiStaticSolver::solve(const NewtonSettings& s) {
     impl_->tangent.refactor_next();  // the retry starts from a state the factorisation may not fit
     if (++report.cuts > s.max_cuts) {
       impl_->u = initial;  // and the whole solve: the state stays the last converged one
+      m.cavity.pressure = initial_pressure;
       impl_->tangent_current = false;
       report.failure = "load step at factor " + std::to_string(target) + " failed after " + std::to_string(s.max_cuts) +
                        " cuts: " + step.failure;

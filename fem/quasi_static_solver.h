@@ -28,6 +28,7 @@
 #include <string>
 #include <vector>
 
+#include "fem/cavity.h"
 #include "fem/material.h"
 
 namespace fetouch::fem {
@@ -98,6 +99,15 @@ class QuasiStaticSolver {
   // condensed (Q1/P0, P2/P0; Simo, Taylor and Pister's mean dilatation). Throws
   // std::invalid_argument for a coupled material. (P1 tetrahedra have one point: no change.)
   void use_mean_dilatation(bool on);
+
+  // A fluid-filled cavity bounded by the boundary faces of `boundary_id` (an inner surface, closed;
+  // P1 or Q1 elements), its pressure following its volume by `law` (fem/cavity.h). The pressure is
+  // part of the body's response: it is not scaled by load steps. Throws std::invalid_argument for
+  // a surface that encloses no volume, a second cavity, or P2/Q2 elements.
+  void add_cavity(unsigned int boundary_id, const CavityLaw& law);
+  double cavity_volume() const;            // m^3, at the current state (0 without a cavity)
+  double cavity_reference_volume() const;  // m^3
+  double cavity_pressure() const;          // Pa
 
   // Inertia (and mass-proportional Rayleigh damping C = alpha M): once enabled, each solve() is one
   // time step of length dt, R(u) + M (a + alpha v) = 0 at the new time, with

@@ -81,6 +81,20 @@ std::unique_ptr<TissueModel> build_tissue_model(const config::Scene& scene) {
     for (int d = 0; d < 3; ++d) weight[d] = scene.material.density_kg_per_m3 * scene.effects.gravity_m_per_s2[d];
     model->solver->apply_body_force([weight](const dealii::Point<3>&) { return weight; });
   }
+  if (scene.effects.has(config::Effect::cavity)) {
+    const auto found = model->mesh.boundary_ids.find(scene.effects.cavity_surface);
+    if (found == model->mesh.boundary_ids.end())
+      throw std::runtime_error("effect cavity: the mesh has no physical group " + scene.effects.cavity_surface);
+    CavityLaw law;
+    law.gas = scene.effects.cavity_law == config::PressureVolumeLaw::isothermal_gas;
+    law.initial_pressure_pa = scene.effects.cavity_initial_pressure_pa;
+    law.bulk_modulus_pa = scene.effects.cavity_bulk_modulus_pa;
+    try {
+      model->solver->add_cavity(found->second, law);
+    } catch (const std::invalid_argument& e) {
+      throw std::runtime_error("effect cavity on " + scene.effects.cavity_surface + ": " + e.what());
+    }
+  }
   if (scene.effects.has(config::Effect::incompressibility)) {
     // The mean-dilatation formulation; a coupled material has no volumetric part to take per cell
     // (the scene loader warned), and keeps the displacement formulation.

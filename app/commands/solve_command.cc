@@ -68,6 +68,13 @@ void write_json(std::ostream& out, const SolveOptions& o, const config::Scene& s
     json.key("max_displacement_m").value(solver.max_displacement());
     json.key("min_jacobian").value(*std::min_element(fields.jacobian.begin(), fields.jacobian.end()));
     json.key("max_von_mises_pa").value(*std::max_element(fields.von_mises.begin(), fields.von_mises.end()));
+    if (scene.effects.has(config::Effect::cavity)) {
+      json.key("cavity").begin_object();
+      json.key("pressure_pa").value(solver.cavity_pressure());
+      json.key("volume_m3").value(solver.cavity_volume());
+      json.key("reference_volume_m3").value(solver.cavity_reference_volume());
+      json.end_object();
+    }
     json.key("reactions_n").begin_object();
     for (const auto& region : scene.boundary) {
       if (region.type != config::BoundaryType::fixed) continue;
@@ -174,6 +181,10 @@ int run_solve(const SolveOptions& o) {
     if (!report.converged) std::cout << "  why: " << report.failure << "\n";
     else {
       std::cout << "  max displacement " << model->solver->max_displacement() * 1e3 << " mm\n";
+      if (scene.effects.has(config::Effect::cavity))
+        std::cout << "  cavity pressure " << model->solver->cavity_pressure() << " Pa, volume "
+                  << model->solver->cavity_volume() * 1e6 << " ml (" << std::setprecision(3)
+                  << 100 * (model->solver->cavity_volume() / model->solver->cavity_reference_volume() - 1) << " %)\n";
       for (size_t p = 0; p < patches.size(); ++p) {
         const auto u = model->solver->patch_displacement(patches[p]);
         std::cout << "  probe " << p + 1 << " displacement (" << u[0] * 1e3 << ", " << u[1] * 1e3 << ", " << u[2] * 1e3

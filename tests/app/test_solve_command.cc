@@ -43,6 +43,25 @@ TEST(SolveCommand, SupportReactionBalancesGravityAndTraction) {
   fs::remove_all(dir);
 }
 
+// A water balloon (tests/data/water_balloon.yaml) pressed at the top with 0.5 N: the equator band
+// takes the 0.5 N (the water's pressure on a closed wall has no net force), the water's pressure
+// rises while its volume stays within p/K of the start, and the bottom pole moves out (down).
+TEST(SolveCommand, WaterBalloonKeepsItsVolumeAndPushesBack) {
+  const fs::path dir = scratch("balloon");
+  const auto r = run_command(fetouch("solve --json --radius 0.015 --press 0 0 0.05 0 0 -0.5 --point 0 0 -0.05 --out " +
+                                     dir.string() + " " + FETOUCH_TEST_DATA_DIR "/data/water_balloon.yaml"));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const YAML::Node j = YAML::Load(r.out);
+  ASSERT_TRUE(j["converged"].as<bool>());
+  EXPECT_NEAR(j["reactions_n"]["equator"][2].as<double>(), 0.5, 1e-6);
+  const double p = j["cavity"]["pressure_pa"].as<double>();
+  const double v = j["cavity"]["volume_m3"].as<double>(), v0 = j["cavity"]["reference_volume_m3"].as<double>();
+  EXPECT_GT(p, 0.0);
+  EXPECT_NEAR(v / v0 - 1, -p / 2.2e9, 1e-10);
+  EXPECT_LT(j["points"][0]["displacement_m"][2].as<double>(), 0.0);
+  fs::remove_all(dir);
+}
+
 // A probe pressing 0.3 N into the block of the shipped scene: the table takes 0.3 N, the probe's
 // patch moves down, and the VTU holds the displacement ParaView warps by, with J > 0 everywhere.
 TEST(SolveCommand, PressWritesAVtuThatVtkReadsBack) {

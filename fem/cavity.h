@@ -1,0 +1,72 @@
+// A fluid-filled cavity (an amniotic sac, a water balloon): a closed inner surface of the tissue
+// enclosing fluid whose pressure follows its volume, so that pressing one side raises the pressure
+// everywhere on the wall.
+//
+// The wall is the mesh's boundary faces of one region, as flat triangles between the vertices
+// (P1 faces exactly; a Q1 face split along a diagonal), oriented so that their normals point out of
+// the cavity (into the tissue). The enclosed volume of the deformed wall is then exactly
+//   V(u) = 1/6 sum over triangles of a . (b x c),   a, b, c = X + u at the vertices,
+// with gradient g = dV/du and a sparse Hessian coupling the vertices of each triangle. The fluid
+// stores the energy Pi(V) with p = -dPi/dV:
+//   linear (a liquid):    p = p0 - K (V - V0) / V0       Pi = -p0 V + K (V - V0)^2 / (2 V0)
+//   isothermal gas:       p = p0 V0 / V                   Pi = -p0 V0 ln V
+// The solver takes p as an unknown beside u, with the law's residual V(u) - V_law(p) = 0: the wall
+// carries the load p g, the tangent gains -p d2V/du2 (sparse), and eliminating dp adds
+// (-dp/dV) g g' (dense, rank one; applied by the Sherman-Morrison formula).
+#pragma once
+
+#include <array>
+#include <cstddef>
+#include <vector>
+
+namespace fetouch::fem {
+
+struct CavityLaw {
+  bool gas = false;             // false: linear (liquid)
+  double initial_pressure_pa = 0;
+  double bulk_modulus_pa = 2.2e9;  // linear law only (water)
+  double pressure(double volume, double reference_volume) const;
+  // The law inverted, V_law(p), and dV_law/dp (< 0): the solver takes p as an unknown.
+  double volume(double pressure, double reference_volume) const;
+  double volume_derivative(double pressure, double reference_volume) const;
+};
+
+struct CavityWall {
+  struct Triangle {
+    std::array<std::array<unsigned int, 3>, 3> dofs;  // [vertex][component] global dof index
+    std::array<std::array<double, 3>, 3> position;    // [vertex] reference position, m
+  };
+  std::vector<Triangle> triangles;
+
+  // V at displacement u (indexed by global dof).
+  double volume(const double* u) const;
+  // g += scale dV/du.
+  void add_gradient(const double* u, double scale, double* g) const;
+  // Calls add(row_dof, column_dof, scale d2V/du_row du_column) for every non-zero entry.
+  template <class Add>
+  void add_hessian(const double* u, double scale, Add add) const;
+};
+
+template <class Add>
+void CavityWall::add_hessian(const double* u, double scale, Add add) const {
+  // d2V/da_i db_j = 1/6 e_ijk c_k, and cyclically: (a, b, c) -> (b, c, a) -> (c, a, b).
+  for (const Triangle& t : triangles) {
+    std::array<std::array<double, 3>, 3> x;
+    for (int v = 0; v < 3; ++v)
+      for (int d = 0; d < 3; ++d) x[v][d] = t.position[v][d] + u[t.dofs[v][d]];
+    for (int v = 0; v < 3; ++v) {
+      const int w = (v + 1) % 3, o = (v + 2) % 3;  // block (v, w) uses the third vertex o
+      const std::array<double, 3>& c = x[o];
+      const double block[3][3] = {{0, c[2], -c[1]}, {-c[2], 0, c[0]}, {c[1], -c[0], 0}};  // e_ijk c_k
+      for (int i = 0; i < 3; ++i)
+        for (int j = 0; j < 3; ++j) {
+          if (block[i][j] == 0) continue;
+          const double value = scale * block[i][j] / 6;
+          add(t.dofs[v][i], t.dofs[w][j], value);
+          add(t.dofs[w][j], t.dofs[v][i], value);
+        }
+    }
+  }
+}
+
+}  // namespace fetouch::fem
