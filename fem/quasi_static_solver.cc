@@ -734,6 +734,8 @@ QuasiStaticSolver::QuasiStaticSolver(const Triangulation<3>& triangulation, cons
     : impl_(std::make_unique<Impl>(triangulation, material, degree)) {}
 
 QuasiStaticSolver::~QuasiStaticSolver() = default;
+QuasiStaticSolver::QuasiStaticSolver(QuasiStaticSolver&&) noexcept = default;
+QuasiStaticSolver& QuasiStaticSolver::operator=(QuasiStaticSolver&&) noexcept = default;
 
 void QuasiStaticSolver::prescribe_displacement(unsigned int boundary_id, std::array<bool, 3> components,
                                                const Tensor<1, 3>& value) {

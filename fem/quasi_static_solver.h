@@ -78,6 +78,8 @@ class QuasiStaticSolver {
  public:
   QuasiStaticSolver(const dealii::Triangulation<3>& triangulation, const Material& material, int degree);
   ~QuasiStaticSolver();
+  QuasiStaticSolver(QuasiStaticSolver&&) noexcept;
+  QuasiStaticSolver& operator=(QuasiStaticSolver&&) noexcept;
 
   // u = value (at load factor 1) on the components selected by `components`, on a boundary region.
   void prescribe_displacement(unsigned int boundary_id, std::array<bool, 3> components,

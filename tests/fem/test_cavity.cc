@@ -96,22 +96,27 @@ TEST(Cavity, PressurisedLiquidSettlesAtLamesThickSphereAnswer) {
   EXPECT_NEAR(u_inner, u_lame, 0.12 * u_lame);
 }
 
+// The full shell held on the outer faces of a band around its equator, water-filled or empty.
+QuasiStaticSolver held_sphere(dealii::Triangulation<3>& tria, const Material& material, bool with_fluid) {
+  shell(tria, /*octant=*/false, 1);
+  for (const auto& cell : tria.active_cell_iterators())
+    for (const unsigned int f : cell->face_indices())
+      if (cell->face(f)->at_boundary() && cell->face(f)->boundary_id() == 1 && std::abs(cell->face(f)->center()[2]) < 0.012)
+        cell->face(f)->set_boundary_id(5);
+  QuasiStaticSolver solver(tria, material, 1);
+  solver.prescribe_displacement(5, {true, true, true}, Tensor<1, 3>());
+  if (with_fluid) solver.add_cavity(0, CavityLaw{});  // water
+  return solver;
+}
+
 struct Pressed {
   double pressure, far_side_uz, near_side_uz, volume_change;  // volume change relative to V0
 };
 
 Pressed press_top(bool with_fluid) {
   dealii::Triangulation<3> tria;
-  shell(tria, /*octant=*/false, 1);
-  // The outer faces of the equator band are held.
-  for (const auto& cell : tria.active_cell_iterators())
-    for (const unsigned int f : cell->face_indices())
-      if (cell->face(f)->at_boundary() && cell->face(f)->boundary_id() == 1 && std::abs(cell->face(f)->center()[2]) < 0.012)
-        cell->face(f)->set_boundary_id(5);
   const NeoHookean material(lame_lambda(5000, 0.45), lame_mu(5000, 0.45));
-  QuasiStaticSolver solver(tria, material, 1);
-  solver.prescribe_displacement(5, {true, true, true}, Tensor<1, 3>());
-  if (with_fluid) solver.add_cavity(0, CavityLaw{});  // water
+  QuasiStaticSolver solver = held_sphere(tria, material, with_fluid);
   const int probe = solver.add_contact_patch(Point<3>(0, 0, kOuter), 0.015);
   Tensor<1, 3> force;
   force[2] = -0.5;
@@ -147,15 +152,8 @@ TEST(Cavity, PressingOneSideRaisesThePressureAndBulgesTheFarSide) {
 TEST(Cavity, ComplianceCouplesOppositeProbesThroughTheWater) {
   const auto coupling = [](bool with_fluid, bool check_fd) {
     dealii::Triangulation<3> tria;
-    shell(tria, /*octant=*/false, 1);
-    for (const auto& cell : tria.active_cell_iterators())
-      for (const unsigned int f : cell->face_indices())
-        if (cell->face(f)->at_boundary() && cell->face(f)->boundary_id() == 1 && std::abs(cell->face(f)->center()[2]) < 0.012)
-          cell->face(f)->set_boundary_id(5);
     const NeoHookean material(lame_lambda(5000, 0.45), lame_mu(5000, 0.45));
-    QuasiStaticSolver solver(tria, material, 1);
-    solver.prescribe_displacement(5, {true, true, true}, Tensor<1, 3>());
-    if (with_fluid) solver.add_cavity(0, CavityLaw{});
+    QuasiStaticSolver solver = held_sphere(tria, material, with_fluid);
     const int top = solver.add_contact_patch(Point<3>(0, 0, kOuter), 0.015);
     const int bottom = solver.add_contact_patch(Point<3>(0, 0, -kOuter), 0.015);
     Tensor<1, 3> force;
