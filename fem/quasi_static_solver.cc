@@ -44,6 +44,8 @@ using namespace dealii;
 struct QuasiStaticSolver::Impl {
   const Triangulation<3>& tria;
   const Material& material;
+  std::map<types::material_id, const Material*> region_materials;  // set_region_material
+  std::vector<const Material*> cell_material;                      // per active cell, in cache order
   bool simplex;
   std::unique_ptr<FiniteElement<3>> fe;
   std::unique_ptr<Mapping<3>> mapping;
@@ -344,7 +346,10 @@ struct QuasiStaticSolver::Impl {
     std::vector<types::global_dof_index> local(c.n);
     Vector<double> cell_external(c.n);
     unsigned int k = 0;
+    cell_material.assign(cells, &material);
     for (const auto& cell : dof.active_cell_iterators()) {
+      const auto region = region_materials.find(cell->material_id());
+      if (region != region_materials.end()) cell_material[k] = region->second;
       values.reinit(cell);
       cell->get_dof_indices(local);
       std::copy(local.begin(), local.end(), c.indices.begin() + std::size_t(k) * c.n);
@@ -428,6 +433,7 @@ struct QuasiStaticSolver::Impl {
     Tensor4 A;
     for (unsigned int k = begin; k < end; ++k) {
       const types::global_dof_index* indices = &c.indices[std::size_t(k) * n];
+      const Material& material = *cell_material[k];
       gather(k, u, u_local);
       cell_matrix = 0;
       cell_internal = 0;
@@ -774,7 +780,7 @@ QuasiStaticSolver::CellFields QuasiStaticSolver::cell_fields() const {
       const double j = determinant(F);
       j_sum += j;
       Tensor2 P;
-      if (j > 0 && m.material.evaluate(F, P, nullptr)) {
+      if (j > 0 && m.cell_material[k]->evaluate(F, P, nullptr)) {
         const Tensor<2, 3> sigma = P * transpose(F) / j;  // Cauchy
         const Tensor<2, 3> dev = sigma - trace(sigma) / 3 * unit_symmetric_tensor<3>();
         vm_sum += std::sqrt(1.5 * scalar_product(dev, dev));
@@ -981,11 +987,25 @@ double QuasiStaticSolver::cavity_pressure() const {
   return m.cavity.active ? m.cavity.pressure : 0.0;
 }
 
+void QuasiStaticSolver::set_region_material(unsigned int material_id, const Material& material) {
+  Impl& m = *impl_;
+  if (m.mean_dilatation) {
+    double u1 = 0, u2 = 0;
+    if (!material.volumetric(1.0, u1, u2))
+      throw std::invalid_argument("the mean-dilatation formulation needs a decoupled material, not " + material.name());
+  }
+  m.region_materials[static_cast<types::material_id>(material_id)] = &material;
+  m.cache.built = false;
+}
+
 void QuasiStaticSolver::use_mean_dilatation(bool on) {
   double u1 = 0, u2 = 0;
-  if (on && !impl_->material.volumetric(1.0, u1, u2))
-    throw std::invalid_argument("the mean-dilatation formulation needs a decoupled material (neo_hookean_incompressible "
-                                "or mooney_rivlin), not " + impl_->material.name());
+  std::vector<const Material*> all{&impl_->material};
+  for (const auto& [id, material] : impl_->region_materials) all.push_back(material);
+  for (const Material* material : all)
+    if (on && !material->volumetric(1.0, u1, u2))
+      throw std::invalid_argument("the mean-dilatation formulation needs a decoupled material (neo_hookean_incompressible "
+                                  "or mooney_rivlin), not " + material->name());
   impl_->mean_dilatation = on;
 }
 

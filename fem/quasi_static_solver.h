@@ -87,6 +87,9 @@ class QuasiStaticSolver {
   // The same with a displacement field g(x) (at load factor 1).
   void prescribe_displacement(unsigned int boundary_id, std::array<bool, 3> components,
                               std::function<dealii::Tensor<1, 3>(const dealii::Point<3>&)> field);
+  // Cells with this material id (a Gmsh physical volume) take `material` instead of the body's
+  // (kept by reference; it must outlive the solver).
+  void set_region_material(unsigned int material_id, const Material& material);
   // A dead-load traction (force per reference area, N/m^2) on a boundary region.
   void apply_traction(unsigned int boundary_id, const dealii::Tensor<1, 3>& traction);
 

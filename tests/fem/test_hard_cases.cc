@@ -127,6 +127,48 @@ TEST(HardCases, TwoProbesPushingTowardsEachOther) {
   EXPECT_LT(solver.patch_displacement(right)[0], -1e-3);
 }
 
+// Stiffness ratio 1e4 between regions. First a closed form: a bar of two layers in series along z
+// (linear elastic, nu = 0, rollers on three faces), soft below z = 2 cm and 1e4 times stiffer
+// above, pulled by a traction t on top: u_top = t (L1/E1 + L2/E2), which P1 and Q1 represent exactly.
+// Then a soft block over a bone-stiff base layer, pressed by a probe into the soft part: it must
+// converge with no inverted element.
+TEST(HardCases, StiffnessRatioTenThousandBetweenRegions) {
+  const double soft = 5000, stiff = 1e4 * soft, t = 50;
+  const LinearElastic soft_linear(0, soft / 2), stiff_linear(0, stiff / 2);  // nu = 0: lambda = 0, mu = E/2
+  for (const bool simplex : {false, true}) {
+    dealii::Triangulation<3> tria;
+    block(tria, simplex, 4);  // z layers of 5/3 cm: the interface z = 0.05/3 lies on faces
+    for (const auto& cell : tria.active_cell_iterators()) cell->set_material_id(cell->center()[2] > 0.05 / 3 ? 1 : 0);
+    QuasiStaticSolver solver(tria, soft_linear, 1);
+    solver.set_region_material(1, stiff_linear);
+    solver.prescribe_displacement(0, {true, false, false}, Tensor<1, 3>());
+    solver.prescribe_displacement(2, {false, true, false}, Tensor<1, 3>());
+    solver.prescribe_displacement(4, {false, false, true}, Tensor<1, 3>());
+    solver.apply_traction(5, along(2, t));
+    NewtonSettings settings;
+    settings.relative_tolerance = 1e-9;  // round-off leaves about 1e-10 with this contrast
+    const SolveReport report = solver.solve(settings);
+    ASSERT_TRUE(report.converged) << report.failure;
+    const double expected = t * (0.05 / 3 / soft + 0.1 / 3 / stiff);
+    const double top = solver.displacement_at(Point<3>(0.05, 0.04, 0.05))[2];
+    std::printf("layered bar (%s): top %.10e m, series closed form %.10e m\n", simplex ? "P1" : "Q1", top, expected);
+    EXPECT_NEAR(top, expected, 1e-8 * expected);
+  }
+  const NeoHookean tissue(lame_lambda(soft, 0.45), lame_mu(soft, 0.45)), bone(lame_lambda(stiff, 0.3), lame_mu(stiff, 0.3));
+  dealii::Triangulation<3> tria;
+  block(tria, true, 4);
+  for (const auto& cell : tria.active_cell_iterators()) cell->set_material_id(cell->center()[2] < 0.05 / 3 ? 1 : 0);
+  QuasiStaticSolver solver(tria, tissue, 2);
+  solver.set_region_material(1, bone);
+  solver.prescribe_displacement(4, {true, true, true}, Tensor<1, 3>());
+  const int probe = solver.add_contact_patch(Point<3>(0.05, 0.04, 0.05), 0.01);
+  solver.set_patch_force(probe, along(2, -1.5));
+  const SolveReport report = solver.solve(NewtonSettings{});
+  expect_sound(solver, report, "probe 1.5 N into tissue on a 1e4 stiffer base");
+  ASSERT_TRUE(report.converged) << report.failure;
+  EXPECT_LT(solver.patch_displacement(probe)[2], -0.1 * 0.05);
+}
+
 TEST(HardCases, SliverTetrahedra) {
   const NeoHookean tissue(lame_lambda(5000, 0.45), lame_mu(5000, 0.45));
   dealii::Triangulation<3> tria;
