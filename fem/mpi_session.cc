@@ -14,7 +14,9 @@ struct MpiSession::Mpi {
 };
 
 MpiSession::MpiSession(int& argc, char**& argv) {
-  if (!std::getenv("OMPI_MCA_orte_tmpdir_base")) {
+  // Only for singletons: under mpirun the launcher's session directory is the one to use.
+  const bool launched = std::getenv("OMPI_COMM_WORLD_SIZE") != nullptr || std::getenv("PMIX_RANK") != nullptr;
+  if (!launched && !std::getenv("OMPI_MCA_orte_tmpdir_base")) {
     directory_ = std::filesystem::temp_directory_path() / ("fetouch_mpi_" + std::to_string(::getpid()));
     std::filesystem::create_directories(directory_);
     setenv("OMPI_MCA_orte_tmpdir_base", directory_.c_str(), 1);

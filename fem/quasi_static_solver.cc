@@ -14,6 +14,9 @@
 #include <deal.II/fe/mapping_fe.h>
 #include <deal.II/fe/mapping_q.h>
 #include <deal.II/grid/grid_tools.h>
+#include <deal.II/lac/sparsity_pattern.h>
+#include <deal.II/lac/sparsity_tools.h>
+#include <deal.II/dofs/dof_renumbering.h>
 #include <deal.II/lac/affine_constraints.h>
 #include <deal.II/lac/dynamic_sparsity_pattern.h>
 #include <deal.II/lac/full_matrix.h>
@@ -31,6 +34,7 @@
 #include <cmath>
 #include <fstream>
 #include <map>
+#include <numeric>
 #include <set>
 #include <limits>
 #include <stdexcept>
@@ -54,7 +58,6 @@ struct QuasiStaticSolver::Impl {
   DoFHandler<3> dof;
   AffineConstraints<double> constraints;  // homogeneous: the Newton update's
   std::vector<bool> constrained;          // per dof
-  TangentSystem tangent;
   bool tangent_current = false;           // the tangent's values are those of the current state
   Vector<double> u;
 
@@ -105,7 +108,19 @@ struct QuasiStaticSolver::Impl {
     return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   }
 
-  Impl(const Triangulation<3>& t, const Material& m, int degree) : tria(t), material(m), dof(t) {
+  // MPI: every rank holds the mesh and the state; the cells are split by METIS, each rank assembling
+  // its own (the sums are reduced onto all ranks), and the tangent's rows are split with them.
+  MPI_Comm comm;
+  int rank = 0, ranks = 1;
+  std::vector<unsigned int> my_cells;  // indices (in cell order) of the cells this rank assembles
+  int owned_begin = 0, owned_end = 0;   // this rank's rows
+  TangentSystem::Method linear_method = TangentSystem::Method::factorisation;
+  TangentSystem tangent;
+
+  Impl(const Triangulation<3>& t, const Material& m, int degree, MPI_Comm c)
+      : tria(t), material(m), dof(t), comm(c), tangent(c) {
+    MPI_Comm_rank(comm, &rank);
+    MPI_Comm_size(comm, &ranks);
     if (degree < 1 || degree > 2) throw std::invalid_argument("element degree must be 1 or 2");
     simplex = tria.all_reference_cells_are_simplex();
     if (simplex) {
@@ -125,7 +140,99 @@ struct QuasiStaticSolver::Impl {
       throw std::invalid_argument("mixed tetrahedral and hexahedral meshes are not supported");
     }
     dof.distribute_dofs(*fe);
+    partition();
     u.reinit(dof.n_dofs());
+  }
+
+  // METIS splits the cells (computed on rank 0, broadcast: every rank must agree); each dof goes to
+  // the lowest rank among its cells', and dofs are renumbered rank by rank so that each rank owns a
+  // contiguous block of rows.
+  void partition() {
+    const unsigned int cells = tria.n_active_cells();
+    std::vector<unsigned int> part(cells, 0);
+    if (ranks > 1) {
+      if (rank == 0) {
+        DynamicSparsityPattern connectivity;
+        GridTools::get_face_connectivity_of_cells(tria, connectivity);
+        SparsityPattern graph;
+        graph.copy_from(connectivity);
+        SparsityTools::partition(graph, static_cast<unsigned int>(ranks), part, SparsityTools::Partitioner::metis);
+      }
+      MPI_Bcast(part.data(), static_cast<int>(cells), MPI_UNSIGNED, 0, comm);
+      std::vector<unsigned int> owner(dof.n_dofs(), static_cast<unsigned int>(ranks));
+      std::vector<types::global_dof_index> indices(fe->n_dofs_per_cell());
+      unsigned int k = 0;
+      for (const auto& cell : dof.active_cell_iterators()) {
+        cell->get_dof_indices(indices);
+        for (const auto i : indices) owner[i] = std::min(owner[i], part[k]);
+        ++k;
+      }
+      std::vector<types::global_dof_index> order(dof.n_dofs()), renumber(dof.n_dofs());
+      std::iota(order.begin(), order.end(), 0);
+      std::stable_sort(order.begin(), order.end(), [&](auto a, auto b) { return owner[a] < owner[b]; });
+      for (types::global_dof_index i = 0; i < order.size(); ++i) renumber[order[i]] = i;
+      dof.renumber_dofs(renumber);
+      owned_begin = static_cast<int>(std::count_if(owner.begin(), owner.end(), [&](unsigned int o) { return o < unsigned(rank); }));
+      owned_end = owned_begin + static_cast<int>(std::count(owner.begin(), owner.end(), unsigned(rank)));
+    } else {
+      owned_begin = 0, owned_end = static_cast<int>(dof.n_dofs());
+    }
+    my_cells.clear();
+    for (unsigned int k = 0; k < cells; ++k)
+      if (part[k] == unsigned(rank)) my_cells.push_back(k);
+  }
+
+  // Sums a vector's per-rank parts onto every rank, bitwise the same everywhere (reduced on rank 0,
+  // then broadcast: a rank that rounded differently would take other Newton decisions).
+  void sum_over_ranks(double* data, std::size_t size) const {
+    if (ranks == 1) return;
+    if (rank == 0) MPI_Reduce(MPI_IN_PLACE, data, static_cast<int>(size), MPI_DOUBLE, MPI_SUM, 0, comm);
+    else MPI_Reduce(data, nullptr, static_cast<int>(size), MPI_DOUBLE, MPI_SUM, 0, comm);
+    MPI_Bcast(data, static_cast<int>(size), MPI_DOUBLE, 0, comm);
+  }
+  bool all_ranks(bool ok) const {
+    if (ranks == 1) return ok;
+    int flag = ok ? 1 : 0;
+    MPI_Allreduce(MPI_IN_PLACE, &flag, 1, MPI_INT, MPI_MIN, comm);
+    return flag == 1;
+  }
+
+  // The rigid-body modes (3 translations, 3 rotations about the centroid), zero on constrained dofs:
+  // algebraic multigrid's near-null space.
+  std::vector<std::vector<double>> rigid_body_modes() const {
+    std::map<types::global_dof_index, Point<3>> points;
+    DoFTools::map_dofs_to_support_points(*mapping, dof, points);
+    std::vector<int> component(dof.n_dofs(), 0);
+    std::vector<types::global_dof_index> indices(fe->n_dofs_per_cell());
+    for (const auto& cell : dof.active_cell_iterators()) {
+      cell->get_dof_indices(indices);
+      for (unsigned int i = 0; i < indices.size(); ++i) component[indices[i]] = fe->system_to_component_index(i).first;
+    }
+    Point<3> centre;
+    for (const auto& [i, x] : points) centre += x / static_cast<double>(points.size());
+    std::vector<std::vector<double>> modes(6, std::vector<double>(dof.n_dofs(), 0.0));
+    for (const auto& [i, x] : points) {
+      if (constrained[i]) continue;
+      const int c = component[i];
+      const Tensor<1, 3> r = x - centre;
+      modes[c][i] = 1;
+      // rotation about axis a: (e_a x r)_c
+      for (int a = 0; a < 3; ++a) {
+        Tensor<1, 3> axis;
+        axis[a] = 1;
+        modes[3 + a][i] = cross_product_3d(axis, r)[c];
+      }
+    }
+    for (std::size_t a = 0; a < modes.size(); ++a) {  // Gram-Schmidt, twice for round-off
+      for (int pass = 0; pass < 2; ++pass)
+        for (std::size_t b = 0; b < a; ++b) {
+          const double d = std::inner_product(modes[a].begin(), modes[a].end(), modes[b].begin(), 0.0);
+          for (std::size_t i = 0; i < modes[a].size(); ++i) modes[a][i] -= d * modes[b][i];
+        }
+      const double norm = std::sqrt(std::inner_product(modes[a].begin(), modes[a].end(), modes[a].begin(), 0.0));
+      for (double& v : modes[a]) v /= norm;
+    }
+    return modes;
   }
 
   bool set_up = false;  // constraints and sparsity for the current supports
@@ -156,7 +263,9 @@ struct QuasiStaticSolver::Impl {
       }
       row_start.push_back(static_cast<int>(columns.size()));
     }
-    tangent.set_pattern(std::move(row_start), std::move(columns));
+    const bool amg = linear_method == TangentSystem::Method::amg;
+    tangent.set_pattern(std::move(row_start), std::move(columns), linear_method, owned_begin, owned_end,
+                        amg ? rigid_body_modes() : std::vector<std::vector<double>>{});
     scatter.clear();
     tangent_current = false;
     compliance_columns.clear();
@@ -419,7 +528,7 @@ struct QuasiStaticSolver::Impl {
   // One thread's share of the assembly: cells [begin, end) add -f_int into r, f_int into `internal`
   // (if given) and, if `values`, the tangent into that value array. False if J <= 0 somewhere.
   bool assemble_cells(unsigned int begin, unsigned int end, const Vector<double>& inertial, double* r, double* internal,
-                      double* values) const {
+                      double* values) const {  // my_cells[begin, end)
     const Cache& c = cache;
     const bool tangent = values != nullptr;
     const unsigned int n = c.n, nq = c.nq;
@@ -431,7 +540,8 @@ struct QuasiStaticSolver::Impl {
     std::vector<double> volume_gradient(mean_dilatation ? n : 0);
     Tensor2 P;
     Tensor4 A;
-    for (unsigned int k = begin; k < end; ++k) {
+    for (unsigned int kk = begin; kk < end; ++kk) {
+      const unsigned int k = my_cells[kk];
       const types::global_dof_index* indices = &c.indices[std::size_t(k) * n];
       const Material& material = *cell_material[k];
       gather(k, u, u_local);
@@ -556,10 +666,11 @@ struct QuasiStaticSolver::Impl {
       this->tangent.zero();
       tangent_current = false;
     }
-    const unsigned int cells = tria.n_active_cells();
+    const unsigned int cells = static_cast<unsigned int>(my_cells.size());
     double* values = tangent ? this->tangent.values() : nullptr;
-    if (cells < 2 * kCellsPerThread) {
-      if (!assemble_cells(0, cells, inertial, r.begin(), internal ? internal->begin() : nullptr, values)) return false;
+    bool ok = true;
+    if (cells < 2 * kCellsPerThread || ranks > 1) {  // in parallel the ranks take the cores
+      ok = assemble_cells(0, cells, inertial, r.begin(), internal ? internal->begin() : nullptr, values);
     } else {
       const unsigned int half = cells / 2;
       const std::size_t dofs = u.size();
@@ -573,13 +684,18 @@ struct QuasiStaticSolver::Impl {
       });
       const bool first_ok = assemble_cells(0, half, inertial, r.begin(), internal ? internal->begin() : nullptr, values);
       worker.join();
-      if (!first_ok || !second_ok) return false;
-      for (std::size_t i = 0; i < dofs; ++i) r[i] += second.r[i];
-      if (internal)
+      ok = first_ok && second_ok;
+      for (std::size_t i = 0; ok && i < dofs; ++i) r[i] += second.r[i];
+      if (internal && ok)
         for (std::size_t i = 0; i < dofs; ++i) (*internal)[i] += second.internal[i];
-      if (tangent)
+      if (tangent && ok)
         for (std::size_t i = 0; i < second.values.size(); ++i) values[i] += second.values[i];
     }
+    // Every rank must take the same decision, then hold the same sums.
+    if (!all_ranks(ok)) return false;
+    sum_over_ranks(r.begin(), r.size());
+    if (internal) sum_over_ranks(internal->begin(), internal->size());
+    if (tangent) sum_over_ranks(values, this->tangent.nonzeros());
     if (cavity.active && !assemble_cavity(r, tangent, internal)) return false;
     if (tangent) {
       this->tangent.finish(constrained);
@@ -736,8 +852,16 @@ struct QuasiStaticSolver::Impl {
   }
 };
 
-QuasiStaticSolver::QuasiStaticSolver(const Triangulation<3>& triangulation, const Material& material, int degree)
-    : impl_(std::make_unique<Impl>(triangulation, material, degree)) {}
+QuasiStaticSolver::QuasiStaticSolver(const Triangulation<3>& triangulation, const Material& material, int degree,
+                                     MPI_Comm comm)
+    : impl_(std::make_unique<Impl>(triangulation, material, degree, comm)) {}
+
+void QuasiStaticSolver::use_algebraic_multigrid(bool on) {
+  impl_->linear_method = on ? TangentSystem::Method::amg : TangentSystem::Method::factorisation;
+  impl_->set_up = false;
+}
+
+int QuasiStaticSolver::ranks() const { return impl_->ranks; }
 
 QuasiStaticSolver::~QuasiStaticSolver() = default;
 QuasiStaticSolver::QuasiStaticSolver(QuasiStaticSolver&&) noexcept = default;

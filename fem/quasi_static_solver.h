@@ -21,6 +21,7 @@
 #include <deal.II/base/tensor.h>
 #include <deal.II/grid/tria.h>
 #include <deal.II/lac/full_matrix.h>
+#include <mpi.h>
 
 #include <array>
 #include <functional>
@@ -76,8 +77,17 @@ inline constexpr double kGalerkinTolerance = 1e-3;
 
 class QuasiStaticSolver {
  public:
-  QuasiStaticSolver(const dealii::Triangulation<3>& triangulation, const Material& material, int degree);
+
+  // All ranks of `comm` step the solver together, each with the whole mesh and state; the cells are
+  // split among them by METIS for assembly and the tangent's rows for the linear algebra (MUMPS or
+  // AMG in parallel). One rank: serial.
+  QuasiStaticSolver(const dealii::Triangulation<3>& triangulation, const Material& material, int degree,
+                    MPI_Comm comm = MPI_COMM_WORLD);
   ~QuasiStaticSolver();
+  int ranks() const;
+  // Linear solves by CG with algebraic multigrid (GAMG, rigid-body near-null space) instead of CG
+  // on a stale sparse Cholesky factorisation: for meshes too large to factorise.
+  void use_algebraic_multigrid(bool on);
   QuasiStaticSolver(QuasiStaticSolver&&) noexcept;
   QuasiStaticSolver& operator=(QuasiStaticSolver&&) noexcept;
 

@@ -55,50 +55,99 @@ struct TangentSystem::Petsc {
   ~Petsc() { destroy(); }
 };
 
-TangentSystem::TangentSystem() : petsc_(std::make_unique<Petsc>()) { limit_library_threads(); }
+TangentSystem::TangentSystem(MPI_Comm comm) : comm_(comm), petsc_(std::make_unique<Petsc>()) {
+  limit_library_threads();
+  MPI_Comm_size(comm_, &ranks_);
+}
 
 TangentSystem::~TangentSystem() = default;
 
 std::size_t TangentSystem::rows() const { return row_start_.empty() ? 0 : row_start_.size() - 1; }
 
-void TangentSystem::set_pattern(std::vector<int> row_start, std::vector<int> columns) {
+void TangentSystem::set_pattern(std::vector<int> row_start, std::vector<int> columns, Method method, int owned_begin,
+                                int owned_end, const std::vector<std::vector<double>>& near_null_space) {
   petsc_->destroy();
   row_start_ = std::move(row_start);
   columns_ = std::move(columns);
   values_.assign(columns_.size(), 0.0);
+  method_ = method;
+  owned_begin_ = owned_begin, owned_end_ = owned_end;
+  baseline_iterations_ = -1;
   const int n = static_cast<int>(rows());
   diagonal_.resize(n);
   for (int i = 0; i < n; ++i) diagonal_[i] = position(i, i);
   Petsc& p = *petsc_;
-  // PETSc works on these arrays in place: assembly writes values_, PETSc reads them.
-  check(MatCreateSeqAIJWithArrays(PETSC_COMM_SELF, n, n, row_start_.data(), columns_.data(), values_.data(), &p.mat),
-        "creating the tangent matrix");
-  check(VecCreateSeqWithArray(PETSC_COMM_SELF, 1, n, nullptr, &p.b), "creating a vector");
-  check(VecCreateSeqWithArray(PETSC_COMM_SELF, 1, n, nullptr, &p.x), "creating a vector");
-  // CHOLMOD's own messages (a matrix that is not positive definite) would reach the terminal.
-  PetscBool set = PETSC_FALSE;
-  check(PetscOptionsHasName(nullptr, nullptr, "-mat_cholmod_print", &set), "reading options");
-  if (!set) check(PetscOptionsSetValue(nullptr, "-mat_cholmod_print", "0"), "quietening CHOLMOD");
-  create_solver(MATSOLVERCHOLMOD);
-  refactor_ = true;
+  const int local = owned_end - owned_begin;
+  if (ranks_ == 1) {
+    // PETSc works on these arrays in place: assembly writes values_, PETSc reads them.
+    check(MatCreateSeqAIJWithArrays(PETSC_COMM_SELF, n, n, row_start_.data(), columns_.data(), values_.data(), &p.mat),
+          "creating the tangent matrix");
+    check(VecCreateSeqWithArray(PETSC_COMM_SELF, 1, n, nullptr, &p.b), "creating a vector");
+    check(VecCreateSeqWithArray(PETSC_COMM_SELF, 1, n, nullptr, &p.x), "creating a vector");
+  } else {
+    // The owned rows, copied in by finish().
+    local_row_start_.assign(local + 1, 0);
+    for (int i = 0; i <= local; ++i) local_row_start_[i] = row_start_[owned_begin + i] - row_start_[owned_begin];
+    check(MatCreateMPIAIJWithArrays(comm_, local, local, n, n, local_row_start_.data(),
+                                    columns_.data() + row_start_[owned_begin], values_.data() + row_start_[owned_begin],
+                                    &p.mat),
+          "creating the distributed tangent matrix");
+    check(VecCreateMPIWithArray(comm_, 1, local, n, nullptr, &p.b), "creating a vector");
+    check(VecCreateMPIWithArray(comm_, 1, local, n, nullptr, &p.x), "creating a vector");
+  }
+  near_null_vectors_ = static_cast<int>(near_null_space.size());
+  near_null_space_.clear();
+  for (const auto& v : near_null_space) near_null_space_.insert(near_null_space_.end(), v.begin() + owned_begin, v.begin() + owned_end);
+  if (method_ == Method::amg) {
+    create_solver(nullptr);
+  } else {
+    // CHOLMOD's own messages (a matrix that is not positive definite) would reach the terminal.
+    PetscBool set = PETSC_FALSE;
+    check(PetscOptionsHasName(nullptr, nullptr, "-mat_cholmod_print", &set), "reading options");
+    if (!set) check(PetscOptionsSetValue(nullptr, "-mat_cholmod_print", "0"), "quietening CHOLMOD");
+    create_solver(ranks_ == 1 ? MATSOLVERCHOLMOD : MATSOLVERMUMPS);
+  }
 }
 
-// CHOLMOD (supernodal LL') by default: in this use, where factorisations are rare and applications
-// many, its triangular solves take half MUMPS's time (bench/bench_fem_frame.cc). It needs K positive
-// definite; a tangent that is not (past a limit point) falls back to MUMPS's LDL'.
+// CHOLMOD (supernodal LL') by default on one rank: in this use, where factorisations are rare and
+// applications many, its triangular solves take half MUMPS's time (bench/bench_fem_frame.cc). It
+// needs K positive definite; a tangent that is not (past a limit point) falls back to MUMPS's LDL'.
+// In parallel MUMPS throughout; AMG has no factorisation.
 void TangentSystem::create_solver(const char* type) {
   Petsc& p = *petsc_;
   if (p.ksp) KSPDestroy(&p.ksp);
   p.factored = false;
-  check(KSPCreate(PETSC_COMM_SELF, &p.ksp), "creating the solver");
+  check(KSPCreate(comm_, &p.ksp), "creating the solver");
   check(KSPSetType(p.ksp, KSPCG), "choosing CG");
   check(KSPSetNormType(p.ksp, KSP_NORM_UNPRECONDITIONED), "choosing the residual norm");
   check(KSPGetPC(p.ksp, &p.pc), "getting the preconditioner");
-  check(PCSetType(p.pc, PCCHOLESKY), "choosing Cholesky");
-  check(PCFactorSetMatSolverType(p.pc, type), "choosing the factorisation");
+  if (method_ == Method::amg) {
+    check(PCSetType(p.pc, PCGAMG), "choosing algebraic multigrid");
+    if (near_null_vectors_ > 0) {
+      // The rigid-body modes (orthonormal, as PETSc requires) as GAMG's near-null space.
+      const int local = owned_end_ - owned_begin_;
+      std::vector<Vec> vectors(near_null_vectors_);
+      for (int k = 0; k < near_null_vectors_; ++k) {
+        check(VecCreateMPI(comm_, local, PETSC_DETERMINE, &vectors[k]), "creating a null-space vector");
+        double* a = nullptr;
+        check(VecGetArray(vectors[k], &a), "filling a null-space vector");
+        std::copy_n(near_null_space_.begin() + std::size_t(k) * local, local, a);
+        check(VecRestoreArray(vectors[k], &a), "filling a null-space vector");
+      }
+      MatNullSpace space;
+      check(MatNullSpaceCreate(comm_, PETSC_FALSE, near_null_vectors_, vectors.data(), &space), "the near-null space");
+      check(MatSetNearNullSpace(p.mat, space), "setting the near-null space");
+      MatNullSpaceDestroy(&space);
+      for (Vec& v : vectors) VecDestroy(&v);
+    }
+    solver_type_ = "gamg";
+  } else {
+    check(PCSetType(p.pc, PCCHOLESKY), "choosing Cholesky");
+    check(PCFactorSetMatSolverType(p.pc, type), "choosing the factorisation");
+    solver_type_ = type;
+  }
   check(KSPSetOperators(p.ksp, p.mat, p.mat), "setting the operator");
   check(KSPSetFromOptions(p.ksp), "reading PETSC_OPTIONS");
-  solver_type_ = type;
 }
 
 int TangentSystem::position(int row, int column) const {
@@ -122,9 +171,16 @@ void TangentSystem::finish(const std::vector<bool>& constrained) {
   const double scale = free > 0 && sum > 0 ? sum / free : 1.0;
   for (int i = 0; i < n; ++i)
     if (constrained[i]) values_[diagonal_[i]] = scale;
-  // Tells PETSc the values changed (they were written in place).
-  check(MatAssemblyBegin(petsc_->mat, MAT_FINAL_ASSEMBLY), "assembling the tangent");
-  check(MatAssemblyEnd(petsc_->mat, MAT_FINAL_ASSEMBLY), "assembling the tangent");
+  if (ranks_ == 1) {
+    // Tells PETSc the values changed (they were written in place).
+    check(MatAssemblyBegin(petsc_->mat, MAT_FINAL_ASSEMBLY), "assembling the tangent");
+    check(MatAssemblyEnd(petsc_->mat, MAT_FINAL_ASSEMBLY), "assembling the tangent");
+  } else {
+    const int local = owned_end_ - owned_begin_, size = static_cast<int>(rows());
+    check(MatUpdateMPIAIJWithArrays(petsc_->mat, local, local, size, size, local_row_start_.data(),
+                                    columns_.data() + row_start_[owned_begin_], values_.data() + row_start_[owned_begin_]),
+          "updating the distributed tangent");
+  }
 }
 
 void TangentSystem::multiply(const double* x, double* y) const {
@@ -148,7 +204,8 @@ void TangentSystem::factor(SolveStats& stats) {
   PetscPopErrorHandler();
   PCFailedReason failed = PC_NOERROR;
   if (code == 0) check(PCGetFailedReason(p.pc, &failed), "checking the factorisation");
-  if ((code != 0 || failed != PC_NOERROR) && std::string(solver_type_) != MATSOLVERMUMPS) {
+  if ((code != 0 || failed != PC_NOERROR) && method_ == Method::factorisation &&
+      std::string(solver_type_) != MATSOLVERMUMPS) {
     create_solver(MATSOLVERMUMPS);
     check(KSPSetUp(p.ksp), "factorising the tangent");
     check(PCGetFailedReason(p.pc, &failed), "checking the factorisation");
@@ -160,9 +217,19 @@ void TangentSystem::factor(SolveStats& stats) {
   check(PCSetReusePreconditioner(p.pc, PETSC_TRUE), "keeping the factorisation");
   p.factored = true;
   refactor_ = false;
+  baseline_iterations_ = -1;
   ++factorisations_;
   stats.refactored = true;
   stats.factor_s += since(start);
+}
+
+void TangentSystem::gather(double* x) const {
+  if (ranks_ == 1) return;
+  std::vector<int> counts(ranks_), displacements(ranks_);
+  const int local = owned_end_ - owned_begin_;
+  MPI_Allgather(&local, 1, MPI_INT, counts.data(), 1, MPI_INT, comm_);
+  MPI_Allgather(&owned_begin_, 1, MPI_INT, displacements.data(), 1, MPI_INT, comm_);
+  MPI_Allgatherv(MPI_IN_PLACE, 0, MPI_DATATYPE_NULL, x, counts.data(), displacements.data(), MPI_DOUBLE, comm_);
 }
 
 TangentSystem::SolveStats TangentSystem::solve(const double* b, double* x, double tolerance, bool zero_guess) {
@@ -170,39 +237,54 @@ TangentSystem::SolveStats TangentSystem::solve(const double* b, double* x, doubl
   SolveStats stats;
   const int n = static_cast<int>(rows());
   if (zero_guess) std::fill(x, x + n, 0.0);
-  check(VecPlaceArray(p.b, b), "wrapping the right-hand side");
-  check(VecPlaceArray(p.x, x), "wrapping the solution");
+  // Each rank hands PETSc its owned block of the whole vectors.
+  check(VecPlaceArray(p.b, b + owned_begin_), "wrapping the right-hand side");
+  check(VecPlaceArray(p.x, x + owned_begin_), "wrapping the solution");
   struct Unplace {
     Petsc& p;
     ~Unplace() { VecResetArray(p.b), VecResetArray(p.x); }
   } unplace{p};
+  const bool amg = method_ == Method::amg;
   const auto direct = [&] {
     const auto start = std::chrono::steady_clock::now();
     check(PCApply(p.pc, p.b, p.x), "solving with the factorisation");
     stats.solve_s += since(start);
   };
+  const auto cg = [&](int limit) {
+    const auto start = std::chrono::steady_clock::now();
+    check(KSPSetInitialGuessNonzero(p.ksp, PETSC_TRUE), "setting the initial guess");
+    check(KSPSetTolerances(p.ksp, tolerance, 0.0, 1e30, limit), "setting tolerances");
+    check(KSPSolve(p.ksp, p.b, p.x), "conjugate gradients");
+    KSPConvergedReason reason;
+    PetscInt iterations;
+    check(KSPGetConvergedReason(p.ksp, &reason), "checking convergence");
+    check(KSPGetIterationNumber(p.ksp, &iterations), "counting iterations");
+    stats.iterations += static_cast<int>(iterations);
+    stats.solve_s += since(start);
+    if (reason > 0) {
+      if (baseline_iterations_ < 0) baseline_iterations_ = static_cast<int>(iterations);
+      if (iterations > std::max(refactor_after_iterations, 3 * baseline_iterations_ / 2)) refactor_ = true;
+    }
+    return reason > 0;
+  };
+  const int limit = amg ? 1000 : max_cg_iterations;
   if (!p.factored || refactor_) {
     factor(stats);
-    direct();
-    return stats;
+    if (amg) {
+      if (!cg(limit)) throw std::runtime_error("CG with algebraic multigrid did not converge (a singular tangent?)");
+    } else {
+      direct();
+    }
+  } else if (!cg(limit)) {
+    // The preconditioner has drifted too far from K (or K lost definiteness): set it up again.
+    factor(stats);
+    if (amg) {
+      if (!cg(limit)) throw std::runtime_error("CG with algebraic multigrid did not converge (a singular tangent?)");
+    } else {
+      direct();
+    }
   }
-  const auto start = std::chrono::steady_clock::now();
-  check(KSPSetInitialGuessNonzero(p.ksp, PETSC_TRUE), "setting the initial guess");
-  check(KSPSetTolerances(p.ksp, tolerance, 0.0, 1e30, max_cg_iterations), "setting tolerances");
-  check(KSPSolve(p.ksp, p.b, p.x), "conjugate gradients");
-  KSPConvergedReason reason;
-  PetscInt iterations;
-  check(KSPGetConvergedReason(p.ksp, &reason), "checking convergence");
-  check(KSPGetIterationNumber(p.ksp, &iterations), "counting iterations");
-  stats.iterations = static_cast<int>(iterations);
-  stats.solve_s += since(start);
-  if (reason > 0) {
-    if (iterations > refactor_after_iterations) refactor_ = true;
-    return stats;
-  }
-  // The factorisation has drifted too far from K (or K lost definiteness): refactor, solve directly.
-  factor(stats);
-  direct();
+  gather(x);
   return stats;
 }
 
@@ -212,13 +294,24 @@ TangentSystem::SolveStats TangentSystem::apply_factorisation(const double* b, do
   if (!p.factored || refactor_) factor(stats);
   const auto start = std::chrono::steady_clock::now();
   const int n = static_cast<int>(rows());
-  Mat rhs = nullptr, solution = nullptr;
-  check(MatCreateSeqDense(PETSC_COMM_SELF, n, columns, const_cast<double*>(b), &rhs), "wrapping right-hand sides");
-  check(MatCreateSeqDense(PETSC_COMM_SELF, n, columns, x, &solution), "wrapping solutions");
-  const PetscErrorCode code = PCMatApply(p.pc, rhs, solution);
-  MatDestroy(&rhs);
-  MatDestroy(&solution);
-  check(code, "applying the factorisation to a block");
+  if (ranks_ == 1 && method_ == Method::factorisation) {
+    Mat rhs = nullptr, solution = nullptr;
+    check(MatCreateSeqDense(PETSC_COMM_SELF, n, columns, const_cast<double*>(b), &rhs), "wrapping right-hand sides");
+    check(MatCreateSeqDense(PETSC_COMM_SELF, n, columns, x, &solution), "wrapping solutions");
+    const PetscErrorCode code = PCMatApply(p.pc, rhs, solution);
+    MatDestroy(&rhs);
+    MatDestroy(&solution);
+    check(code, "applying the factorisation to a block");
+  } else {  // one column at a time
+    for (int k = 0; k < columns; ++k) {
+      check(VecPlaceArray(p.b, b + std::size_t(k) * n + owned_begin_), "wrapping a right-hand side");
+      check(VecPlaceArray(p.x, x + std::size_t(k) * n + owned_begin_), "wrapping a solution");
+      const PetscErrorCode code = PCApply(p.pc, p.b, p.x);
+      VecResetArray(p.b), VecResetArray(p.x);
+      check(code, "applying the preconditioner");
+      gather(x + std::size_t(k) * n);
+    }
+  }
   stats.solve_s += since(start);
   return stats;
 }

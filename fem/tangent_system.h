@@ -14,8 +14,17 @@
 // Constrained (fixed) unknowns are rows and columns with only a diagonal entry, of the size of the
 // mean free diagonal so that the preconditioner sees a well-scaled matrix.
 //
-// Serial (PETSc on MPI_COMM_SELF). Needs MPI initialised (fem::MpiSession).
+// Or, selectable (and chosen by size in the scene), CG preconditioned by algebraic multigrid
+// (PETSc's GAMG, told the rigid-body modes as its near-null space), set up again when CG needs half
+// as many iterations again as it did after the last set-up.
+//
+// In parallel the matrix is PETSc's MPIAIJ over a communicator, each rank owning a contiguous block
+// of rows, with MUMPS as the factorisation (CHOLMOD is serial). Every rank keeps the whole CSR
+// pattern and values (the solver reduces them) and whole right-hand sides and solutions: solves
+// gather the solution onto every rank. Needs MPI initialised (fem::MpiSession).
 #pragma once
+
+#include <mpi.h>
 
 #include <cstddef>
 #include <memory>
@@ -25,14 +34,18 @@ namespace fetouch::fem {
 
 class TangentSystem {
  public:
-  TangentSystem();
+  enum class Method { factorisation, amg };
+  explicit TangentSystem(MPI_Comm comm = MPI_COMM_SELF);
   ~TangentSystem();
   TangentSystem(const TangentSystem&) = delete;
   TangentSystem& operator=(const TangentSystem&) = delete;
 
-  // The sparsity: row_start (rows + 1 entries) and the column indices of each row, sorted. A new
-  // pattern drops the factorisation.
-  void set_pattern(std::vector<int> row_start, std::vector<int> columns);
+  // The sparsity: row_start (rows + 1 entries) and the column indices of each row, sorted; this
+  // rank owns rows [owned_begin, owned_end) (all of them on one rank). A new pattern drops the
+  // factorisation. `near_null_space`: for AMG, the rigid-body modes (each a whole vector).
+  void set_pattern(std::vector<int> row_start, std::vector<int> columns, Method method, int owned_begin, int owned_end,
+                   const std::vector<std::vector<double>>& near_null_space = {});
+  Method method() const { return method_; }
   std::size_t rows() const;
   std::size_t nonzeros() const { return values_.size(); }
 
@@ -73,7 +86,16 @@ class TangentSystem {
  private:
   void factor(SolveStats& stats);
   void create_solver(const char* type);
+  void gather(double* x) const;  // the owned block of x from each rank, onto every rank
   const char* solver_type_ = nullptr;
+  MPI_Comm comm_;
+  int ranks_ = 1;
+  Method method_ = Method::factorisation;
+  int owned_begin_ = 0, owned_end_ = 0;
+  int baseline_iterations_ = -1;  // of the first CG solve after a set-up
+  std::vector<int> local_row_start_;  // the owned rows' offsets, from 0 (parallel)
+  std::vector<double> near_null_space_;
+  int near_null_vectors_ = 0;
   std::vector<int> row_start_, columns_, diagonal_;
   std::vector<double> values_;
   bool refactor_ = true;

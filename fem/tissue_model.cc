@@ -66,6 +66,12 @@ std::unique_ptr<TissueModel> build_tissue_model(const config::Scene& scene) {
   }
 
   model->solver = std::make_unique<QuasiStaticSolver>(model->triangulation, *model->material, model->degree);
+  // The linear solver: CG on a stale factorisation, or CG with algebraic multigrid past the size
+  // where factorising costs too much (solver.direct_max_dofs) or when the scene asks for it.
+  const bool amg = scene.solver.linear_solver == config::LinearSolver::cg_amg ||
+                   (scene.solver.linear_solver == config::LinearSolver::automatic &&
+                    model->solver->dofs() > static_cast<unsigned int>(scene.solver.direct_max_dofs));
+  model->solver->use_algebraic_multigrid(amg);
   for (const config::BoundaryRegion& region : scene.boundary) {
     const unsigned int id = model->region_ids.at(region.name);
     if (region.type == config::BoundaryType::fixed) {

@@ -4,6 +4,8 @@
 // and a JSON summary: displacements at named points, reactions, Newton's history.
 #include <CLI/CLI.hpp>
 
+#include <mpi.h>
+
 #include <chrono>
 #include <filesystem>
 #include <fstream>
@@ -45,6 +47,7 @@ void write_json(std::ostream& out, const SolveOptions& o, const config::Scene& s
   json.key("scene").value(scene.source.string());
   json.key("converged").value(report.converged);
   if (!report.converged) json.key("failure").value(report.failure);
+  json.key("ranks").value(model.solver->ranks());
   json.key("dofs").value(static_cast<long>(solver.dofs()));
   json.key("cells").value(static_cast<long>(solver.cells()));
   json.key("element_degree").value(model.degree);
@@ -155,6 +158,10 @@ int run_solve(const SolveOptions& o) {
   std::ostringstream json;
   write_json(json, o, scene, *model, report, seconds, patches, vtu, pvd);
   json << "\n";
+  // Under mpirun every rank solved (the same state on each); rank 0 writes and reports.
+  int rank = 0;
+  MPI_Comm_rank(MPI_COMM_WORLD, &rank);
+  if (rank != 0) return report.converged ? kExitOk : kExitFailure;
   try {
     fs::create_directories(dir);
     if (report.converged) {

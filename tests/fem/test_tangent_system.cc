@@ -18,7 +18,7 @@ void tridiagonal(TangentSystem& k, int n, double diagonal) {
     for (int j = std::max(0, i - 1); j <= std::min(n - 1, i + 1); ++j) columns.push_back(j);
     start.push_back(static_cast<int>(columns.size()));
   }
-  if (k.rows() != static_cast<std::size_t>(n)) k.set_pattern(start, columns);
+  if (k.rows() != static_cast<std::size_t>(n)) k.set_pattern(start, columns, TangentSystem::Method::factorisation, 0, n);
   k.zero();
   for (int i = 0; i < n; ++i) {
     k.add(i, i, diagonal);
