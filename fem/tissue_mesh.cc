@@ -1,5 +1,7 @@
 #include "fem/tissue_mesh_builder.h"
 
+#include "fem/vtu_mesh.h"
+
 #include <deal.II/grid/grid_generator.h>
 #include <deal.II/grid/grid_in.h>
 #include <deal.II/grid/grid_tools.h>
@@ -149,9 +151,12 @@ TissueMeshInfo build_tissue_mesh(const config::MeshSpec& spec, Triangulation<3>&
       break;
     case config::MeshSource::file: {
       const std::string file = spec.path.string();
+      if (spec.path.extension() == ".vtu") {
+        info.boundary_ids = read_vtu_mesh(file, tria);
+        break;
+      }
       if (spec.path.extension() != ".msh")
-        throw std::runtime_error(file + ": the solver reads Gmsh .msh meshes; convert .vtu with "
-                                        "`gmsh -3 -format msh4`");
+        throw std::runtime_error(file + ": the solver reads Gmsh .msh and VTK .vtu meshes");
       dealii::GridIn<3> in;
       in.attach_triangulation(tria);
       try {

@@ -1,0 +1,116 @@
+#include "fem/vtu_mesh.h"
+
+#include <deal.II/grid/grid_tools.h>
+#include <deal.II/grid/tria_description.h>
+#include <vtkCellData.h>
+#include <vtkCellType.h>
+#include <vtkDataArray.h>
+#include <vtkFieldData.h>
+#include <vtkIdList.h>
+#include <vtkSmartPointer.h>
+#include <vtkStringArray.h>
+#include <vtkUnstructuredGrid.h>
+#include <vtkXMLUnstructuredGridReader.h>
+
+#include <algorithm>
+#include <array>
+#include <filesystem>
+#include <set>
+#include <stdexcept>
+#include <vector>
+
+namespace fetouch::fem {
+
+using dealii::Point;
+
+namespace {
+
+double signed_volume(const std::vector<Point<3>>& v, const std::vector<unsigned int>& c) {
+  return ((v[c[1]] - v[c[0]]) * dealii::cross_product_3d(v[c[2]] - v[c[0]], v[c[3]] - v[c[0]])) / 6;
+}
+
+}  // namespace
+
+std::map<std::string, unsigned int> read_vtu_mesh(const std::string& path, dealii::Triangulation<3>& tria) {
+  if (!std::filesystem::is_regular_file(path)) throw std::runtime_error(path + ": no such file");
+  auto reader = vtkSmartPointer<vtkXMLUnstructuredGridReader>::New();
+  reader->SetFileName(path.c_str());
+  // VTK's own parser messages would go to the terminal; the errors below say what is wrong.
+  const int warnings = vtkObject::GetGlobalWarningDisplay();
+  vtkObject::GlobalWarningDisplayOff();
+  const bool readable = reader->CanReadFile(path.c_str()) != 0;
+  if (readable) reader->Update();
+  vtkObject::SetGlobalWarningDisplay(warnings);
+  if (!readable) throw std::runtime_error(path + ": not a VTK XML unstructured grid");
+  vtkUnstructuredGrid* grid = reader->GetOutput();
+  if (!grid || grid->GetNumberOfPoints() == 0)
+    throw std::runtime_error(path + ": the grid has no points (a truncated or empty file?)");
+
+  std::vector<Point<3>> vertices(grid->GetNumberOfPoints());
+  for (vtkIdType i = 0; i < grid->GetNumberOfPoints(); ++i) {
+    double x[3];
+    grid->GetPoint(i, x);
+    vertices[i] = Point<3>(x[0], x[1], x[2]);
+  }
+  vtkDataArray* material = grid->GetCellData()->GetArray("material_id");
+  vtkDataArray* boundary = grid->GetCellData()->GetArray("boundary_id");
+
+  std::vector<dealii::CellData<3>> cells;
+  dealii::SubCellData faces;
+  std::set<unsigned int> boundary_ids;
+  int volume_type = -1;
+  auto ids = vtkSmartPointer<vtkIdList>::New();
+  for (vtkIdType c = 0; c < grid->GetNumberOfCells(); ++c) {
+    const int type = grid->GetCellType(c);
+    grid->GetCellPoints(c, ids);
+    std::vector<unsigned int> v(ids->GetNumberOfIds());
+    for (vtkIdType k = 0; k < ids->GetNumberOfIds(); ++k) v[k] = static_cast<unsigned int>(ids->GetId(k));
+    if (type == VTK_TETRA || type == VTK_HEXAHEDRON) {
+      if (volume_type >= 0 && volume_type != type)
+        throw std::runtime_error(path + ": mixed tetrahedra and hexahedra are not supported (cell " + std::to_string(c) + ")");
+      volume_type = type;
+      dealii::CellData<3> cell(type == VTK_TETRA ? 4 : 8);
+      if (type == VTK_TETRA) {
+        if (signed_volume(vertices, v) < 0) std::swap(v[2], v[3]);
+        cell.vertices = v;
+      } else {  // VTK 0 1 2 3 go around the bottom; deal.II numbers lexicographically
+        cell.vertices = {v[0], v[1], v[3], v[2], v[4], v[5], v[7], v[6]};
+      }
+      cell.material_id = material ? static_cast<dealii::types::material_id>(material->GetTuple1(c)) : 0;
+      cells.push_back(cell);
+    } else if (type == VTK_TRIANGLE || type == VTK_QUAD) {
+      if (!boundary) continue;  // untagged surface cells carry no region
+      const double id = boundary->GetTuple1(c);
+      if (id < 0 || id > 255)
+        throw std::runtime_error(path + ": boundary_id " + std::to_string(id) + " of cell " + std::to_string(c) +
+                                 " is outside 0..255");
+      dealii::CellData<2> face(type == VTK_TRIANGLE ? 3 : 4);
+      face.vertices = type == VTK_TRIANGLE ? v : std::vector<unsigned int>{v[0], v[1], v[3], v[2]};
+      face.boundary_id = static_cast<dealii::types::boundary_id>(id);
+      boundary_ids.insert(static_cast<unsigned int>(id));
+      faces.boundary_quads.push_back(face);
+    }
+  }
+  if (cells.empty()) throw std::runtime_error(path + ": no tetrahedra or hexahedra in the grid");
+  tria.clear();
+  try {
+    dealii::GridTools::delete_unused_vertices(vertices, cells, faces);
+    if (volume_type == VTK_HEXAHEDRON) dealii::GridTools::consistently_order_cells(cells);
+    tria.create_triangulation(vertices, cells, faces);
+  } catch (const std::exception&) {
+    throw std::runtime_error(path + ": deal.II could not build the mesh (a boundary cell that is not a face of a volume "
+                                    "cell, or cells that do not fit together)");
+  }
+
+  std::map<std::string, unsigned int> names;
+  auto* labels = vtkStringArray::SafeDownCast(grid->GetFieldData()->GetAbstractArray("boundary_names"));
+  for (const unsigned int id : boundary_ids) {
+    std::string name = "boundary_" + std::to_string(id);
+    if (labels && static_cast<vtkIdType>(id) < labels->GetNumberOfValues() && !labels->GetValue(id).empty())
+      name = labels->GetValue(id);
+    names[name] = id;
+  }
+  return names;
+}
+
+}  // namespace fetouch::fem
