@@ -422,11 +422,27 @@ struct QuasiStaticSolver::Impl {
     if (dynamics.newmark) return v_old[i] + dt * ((1 - dynamics.gamma) * a_old[i] + dynamics.gamma * a_new);
     return (u_new - u_old[i]) / dt;
   }
-  // d(a + alpha v)/du+ for the tangent.
-  double inertia_gain() const {
-    const double dt = dynamics.time_step_s;
-    const double dv = dynamics.newmark ? dynamics.gamma * dt * c0 : 1 / dt;
-    return c0 + dynamics.rayleigh_mass_per_s * dv;
+  // dv+/du+, and d(a + alpha v)/du+ for the tangent.
+  double velocity_gain() const { return dynamics.newmark ? dynamics.gamma * dynamics.time_step_s * c0 : 1 / dynamics.time_step_s; }
+  double inertia_gain() const { return c0 + dynamics.rayleigh_mass_per_s * velocity_gain(); }
+
+  // beta K0 for stiffness-proportional damping: the tangent's values at the reference state, the
+  // constrained rows' diagonal left out (built by the first dynamic solve).
+  std::vector<double> reference_stiffness;
+  void build_reference_stiffness() {
+    const Vector<double> state = u;
+    const bool was_dynamic = dynamic;
+    u = 0;
+    dynamic = false;
+    Vector<double> r(u.size());
+    const bool ok = assemble(0.0, r, /*tangent=*/true);
+    u = state;
+    dynamic = was_dynamic;
+    tangent_current = false;
+    if (!ok) throw std::runtime_error("stiffness damping: the reference state's tangent could not be assembled");
+    reference_stiffness.assign(tangent.values(), tangent.values() + tangent.nonzeros());
+    for (types::global_dof_index i = 0; i < u.size(); ++i)
+      if (constrained[i]) reference_stiffness[tangent.position(static_cast<int>(i), static_cast<int>(i))] = 0;
   }
 
   void build_cache() {
@@ -696,6 +712,19 @@ struct QuasiStaticSolver::Impl {
     sum_over_ranks(r.begin(), r.size());
     if (internal) sum_over_ranks(internal->begin(), internal->size());
     if (tangent) sum_over_ranks(values, this->tangent.nonzeros());
+    if (dynamic && dynamics.rayleigh_stiffness_s != 0 && !reference_stiffness.empty()) {
+      // beta K0 v+ into the residual, beta K0 dv+/du+ into the tangent.
+      Vector<double> velocity_now(u.size()), damping(u.size());
+      for (types::global_dof_index i = 0; i < u.size(); ++i) velocity_now[i] = velocity(u[i], acceleration(u[i], i), i);
+      this->tangent.multiply(reference_stiffness.data(), velocity_now.begin(), damping.begin());
+      const double beta = dynamics.rayleigh_stiffness_s;
+      for (types::global_dof_index i = 0; i < u.size(); ++i) {
+        if (internal) (*internal)[i] += beta * damping[i];
+        if (!constrained[i]) r[i] -= beta * damping[i];
+      }
+      if (tangent)
+        for (std::size_t k = 0; k < reference_stiffness.size(); ++k) values[k] += beta * velocity_gain() * reference_stiffness[k];
+    }
     if (cavity.active && !assemble_cavity(r, tangent, internal)) return false;
     if (tangent) {
       this->tangent.finish(constrained);
@@ -1136,6 +1165,8 @@ void QuasiStaticSolver::use_mean_dilatation(bool on) {
 void QuasiStaticSolver::enable_dynamics(const Dynamics& dynamics) {
   if (!(dynamics.time_step_s > 0) || !(dynamics.density_kg_per_m3 > 0))
     throw std::invalid_argument("dynamics: the time step and the density must be positive");
+  if (dynamics.rayleigh_mass_per_s < 0 || dynamics.rayleigh_stiffness_s < 0)
+    throw std::invalid_argument("dynamics: Rayleigh damping coefficients must not be negative");
   Impl& m = *impl_;
   m.dynamic = true;
   m.dynamics = dynamics;
@@ -1164,6 +1195,8 @@ double QuasiStaticSolver::l2_error(const std::function<Tensor<1, 3>(const Point<
 
 SolveReport QuasiStaticSolver::solve(const NewtonSettings& s) {
   impl_->setup_constraints();
+  if (impl_->dynamic && impl_->dynamics.rayleigh_stiffness_s != 0 && impl_->reference_stiffness.empty())
+    impl_->build_reference_stiffness();
   const Vector<double> initial = impl_->u;
   const double initial_pressure = impl_->cavity.pressure;
   if (impl_->dynamic) impl_->u_old = initial;

@@ -124,8 +124,10 @@ class QuasiStaticSolver {
   double cavity_reference_volume() const;  // m^3
   double cavity_pressure() const;          // Pa
 
-  // Inertia (and mass-proportional Rayleigh damping C = alpha M): once enabled, each solve() is one
-  // time step of length dt, R(u) + M (a + alpha v) = 0 at the new time, with
+  // Inertia and Rayleigh damping C = alpha M + beta K0: once enabled, each solve() is one time step of
+  // length dt, R(u) + M (a + alpha v) + beta K0 v = 0 at the new time, K0 the tangent of the
+  // reference state (so the damping is linear: a mode of frequency w is damped at the ratio
+  // zeta = alpha / (2 w) + beta w / 2), with
   //   Newmark (beta, gamma):  a+ = (u+ - u - dt v)/(beta dt^2) - (1 - 2 beta)/(2 beta) a,
   //                           v+ = v + dt ((1 - gamma) a + gamma a+)      (1/4, 1/2: no dissipation)
   //   backward Euler:         v+ = (u+ - u)/dt,  a+ = (v+ - v)/dt          (first order, dissipative)
@@ -136,6 +138,7 @@ class QuasiStaticSolver {
     bool newmark = true;  // false: backward Euler
     double beta = 0.25, gamma = 0.5;
     double rayleigh_mass_per_s = 0;  // alpha
+    double rayleigh_stiffness_s = 0;  // beta
   };
   void enable_dynamics(const Dynamics& dynamics);
 

@@ -183,11 +183,11 @@ void TangentSystem::finish(const std::vector<bool>& constrained) {
   }
 }
 
-void TangentSystem::multiply(const double* x, double* y) const {
+void TangentSystem::multiply(const double* values, const double* x, double* y) const {
   const int n = static_cast<int>(rows());
   for (int i = 0; i < n; ++i) {
     double sum = 0;
-    for (int k = row_start_[i]; k < row_start_[i + 1]; ++k) sum += values_[k] * x[columns_[k]];
+    for (int k = row_start_[i]; k < row_start_[i + 1]; ++k) sum += values[k] * x[columns_[k]];
     y[i] = sum;
   }
 }

@@ -58,8 +58,9 @@ class TangentSystem {
   // Constrained rows and columns become diagonal (the caller skipped their entries).
   void finish(const std::vector<bool>& constrained);
 
-  // y = K x.
-  void multiply(const double* x, double* y) const;
+  // y = K x; or y = A x for another value array A of the same pattern.
+  void multiply(const double* x, double* y) const { multiply(values_.data(), x, y); }
+  void multiply(const double* values, const double* x, double* y) const;
 
   struct SolveStats {
     int iterations = 0;       // CG iterations (0 when solved directly after a refactorisation)

@@ -130,9 +130,8 @@ std::optional<QuasiStaticSolver::Dynamics> scene_dynamics(const config::Scene& s
       throw std::runtime_error("time integrator hht is not implemented yet; use newmark or backward_euler");
   }
   if (damping) {
-    if (scene.effects.rayleigh_stiffness_s != 0)
-      throw std::runtime_error("stiffness-proportional Rayleigh damping is not implemented yet; use mass_per_s only");
     d.rayleigh_mass_per_s = scene.effects.rayleigh_mass_per_s;
+    d.rayleigh_stiffness_s = scene.effects.rayleigh_stiffness_s;
   }
   return d;
 }

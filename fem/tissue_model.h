@@ -35,7 +35,7 @@ std::unique_ptr<TissueModel> build_tissue_model(const config::Scene& scene);
 
 // The time stepping a scene asks for (effects inertia and damping; one step per solver frame), or
 // nothing for a quasi-static scene. Throws std::runtime_error for what the solver cannot do yet
-// (HHT-alpha, stiffness-proportional Rayleigh damping), naming it.
+// (HHT-alpha), naming it.
 std::optional<QuasiStaticSolver::Dynamics> scene_dynamics(const config::Scene& scene);
 
 }  // namespace fetouch::fem
