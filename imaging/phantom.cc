@@ -1,0 +1,213 @@
+#include "imaging/phantom.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <random>
+#include <stdexcept>
+
+namespace fetouch::imaging {
+
+namespace {
+
+using Vec = std::array<double, 3>;
+
+// Uniform in [lo, hi) from the raw 32-bit output, the same on every standard library (the
+// <random> distributions are implementation-defined).
+class Dice {
+ public:
+  explicit Dice(std::uint32_t seed) : engine_(seed) {}
+  double uniform(double lo, double hi) { return lo + (hi - lo) * (engine_() / 4294967296.0); }
+  // Standard normal by Box-Muller.
+  double normal() {
+    const double u1 = (engine_() + 1.0) / 4294967297.0, u2 = engine_() / 4294967296.0;
+    return std::sqrt(-2 * std::log(u1)) * std::cos(2 * M_PI * u2);
+  }
+
+ private:
+  std::mt19937 engine_;
+};
+
+Vec rotate_z(const Vec& x, double angle) {
+  const double c = std::cos(angle), s = std::sin(angle);
+  return {c * x[0] - s * x[1], s * x[0] + c * x[1], x[2]};
+}
+
+Vec add(const Vec& a, const Vec& b) { return {a[0] + b[0], a[1] + b[1], a[2] + b[2]}; }
+
+bool inside(const PhantomGeometry::Ellipsoid& e, const Vec& x, double shrink = 0) {
+  const Vec local = rotate_z({x[0] - e.centre[0], x[1] - e.centre[1], x[2] - e.centre[2]}, -e.yaw);
+  double sum = 0;
+  for (int d = 0; d < 3; ++d) {
+    const double r = e.radii[d] - shrink;
+    if (r <= 0) return false;
+    sum += local[d] * local[d] / (r * r);
+  }
+  return sum <= 1;
+}
+
+bool inside(const PhantomGeometry::Capsule& c, const Vec& x) {
+  Vec ab{c.b[0] - c.a[0], c.b[1] - c.a[1], c.b[2] - c.a[2]}, ax{x[0] - c.a[0], x[1] - c.a[1], x[2] - c.a[2]};
+  const double length2 = ab[0] * ab[0] + ab[1] * ab[1] + ab[2] * ab[2];
+  const double t = std::clamp((ax[0] * ab[0] + ax[1] * ab[1] + ax[2] * ab[2]) / length2, 0.0, 1.0);
+  double d2 = 0;
+  for (int d = 0; d < 3; ++d) d2 += (ax[d] - t * ab[d]) * (ax[d] - t * ab[d]);
+  return d2 <= c.radius * c.radius;
+}
+
+// Echogenicity (mean grey level before attenuation) of each label.
+double echogenicity(std::uint8_t label) {
+  switch (label) {
+    case kTissue: return 90;
+    case kUterineWall: return 150;
+    case kAmnioticFluid: return 8;
+    case kHead: return 70;
+    case kSkull: return 230;
+    case kTrunk: return 110;
+    case kLimb: return 120;
+  }
+  return 0;
+}
+
+// The share of a beam's energy an interface reflects back (and so takes from what lies below).
+double reflectance(std::uint8_t above, std::uint8_t below) {
+  if (above == below) return 0;
+  if (above == kSkull || below == kSkull) return 0.45;
+  if (above == kAmnioticFluid || below == kAmnioticFluid) return 0.08;
+  return 0.03;
+}
+
+// A normalised 1D Gaussian kernel of standard deviation sigma (voxels), truncated at 3 sigma.
+std::vector<double> gaussian_kernel(double sigma) {
+  const int half = std::max(1, static_cast<int>(std::ceil(3 * sigma)));
+  std::vector<double> w(2 * half + 1);
+  double sum = 0;
+  for (int k = -half; k <= half; ++k) sum += w[k + half] = std::exp(-0.5 * k * k / (sigma * sigma));
+  for (double& v : w) v /= sum;
+  return w;
+}
+
+// Separable convolution along one axis, periodic (so the speckle is statistically the same
+// everywhere, up to the volume's faces).
+void smooth_axis(std::vector<float>& field, const std::array<int, 3>& n, int axis, const std::vector<double>& w) {
+  const int half = static_cast<int>(w.size() / 2);
+  const std::size_t stride = axis == 0 ? 1 : axis == 1 ? std::size_t(n[0]) : std::size_t(n[0]) * n[1];
+  std::vector<float> line(n[axis]), out(n[axis]);
+  const int a1 = axis == 0 ? 1 : 0, a2 = axis == 2 ? 1 : 2;
+  for (int p = 0; p < n[a2]; ++p)
+    for (int q = 0; q < n[a1]; ++q) {
+      std::array<int, 3> start{0, 0, 0};
+      start[a1] = q, start[a2] = p;
+      const std::size_t base = (std::size_t(start[2]) * n[1] + start[1]) * n[0] + start[0];
+      for (int i = 0; i < n[axis]; ++i) line[i] = field[base + i * stride];
+      for (int i = 0; i < n[axis]; ++i) {
+        double sum = 0;
+        for (int k = -half; k <= half; ++k) sum += w[k + half] * line[((i + k) % n[axis] + n[axis]) % n[axis]];
+        out[i] = static_cast<float>(sum);
+      }
+      for (int i = 0; i < n[axis]; ++i) field[base + i * stride] = out[i];
+    }
+}
+
+}  // namespace
+
+std::uint8_t PhantomGeometry::label_at(const std::array<double, 3>& x) const {
+  if (!inside(uterus_outer, x)) return kTissue;
+  if (!inside(uterus_inner, x)) return kUterineWall;
+  if (inside(head, x)) return inside(head, x, skull_thickness_mm) ? kHead : kSkull;
+  for (const Capsule& limb : limbs)
+    if (inside(limb, x)) return kLimb;
+  if (inside(trunk, x)) return kTrunk;
+  return kAmnioticFluid;
+}
+
+PhantomGeometry phantom_geometry(std::uint32_t seed) {
+  Dice dice(seed);
+  const auto jitter = [&](double value, double relative) { return value * dice.uniform(1 - relative, 1 + relative); };
+  PhantomGeometry g;
+  g.uterus_outer.radii = {jitter(72, 0.05), jitter(56, 0.05), jitter(50, 0.05)};
+  g.uterus_outer.yaw = dice.uniform(-0.1, 0.1);
+  const double wall = jitter(7, 0.1);
+  g.uterus_inner = g.uterus_outer;
+  for (double& r : g.uterus_inner.radii) r -= wall;
+  // The fetus in its own frame (x head-wards), turned by `yaw` and placed in the sac.
+  const double yaw = dice.uniform(-0.35, 0.35);
+  const Vec centre{dice.uniform(-6, 2), dice.uniform(-4, 4), dice.uniform(-6, 0)};
+  const auto place = [&](const Vec& local) { return add(centre, rotate_z(local, yaw)); };
+  g.trunk.radii = {jitter(27, 0.08), jitter(15, 0.08), jitter(14, 0.08)};
+  g.trunk.centre = place({-10, 0, 0});
+  g.trunk.yaw = yaw;
+  g.head.radii = {jitter(18, 0.06), jitter(16, 0.06), jitter(17, 0.06)};
+  g.head.centre = place({-10 + g.trunk.radii[0] + g.head.radii[0] - 5, 0, 3});
+  g.head.yaw = yaw;
+  g.skull_thickness_mm = jitter(3, 0.1);
+  // Arms from the shoulders forward and down, legs from the hips folded forward.
+  const double r = jitter(4.5, 0.1);
+  const Vec shoulders{-10 + 0.6 * g.trunk.radii[0], 0, 0}, hips{-10 - 0.7 * g.trunk.radii[0], 0, 0};
+  const double side = g.trunk.radii[1] * 0.7;
+  g.limbs[0] = {place({shoulders[0], side, 0}), place({shoulders[0] + dice.uniform(2, 10), side + 6, dice.uniform(-20, -14)}), r};
+  g.limbs[1] = {place({shoulders[0], -side, 0}), place({shoulders[0] + dice.uniform(2, 10), -side - 6, dice.uniform(-20, -14)}), r};
+  g.limbs[2] = {place({hips[0], side, 0}), place({hips[0] + dice.uniform(8, 16), side + 5, dice.uniform(-22, -16)}), 1.2 * r};
+  g.limbs[3] = {place({hips[0], -side, 0}), place({hips[0] + dice.uniform(8, 16), -side - 5, dice.uniform(-22, -16)}), 1.2 * r};
+  return g;
+}
+
+Phantom make_phantom(const PhantomSettings& s) {
+  if (!(s.spacing_mm > 0)) throw std::invalid_argument("phantom: the spacing must be positive");
+  Phantom p;
+  p.geometry = phantom_geometry(s.seed);
+  std::array<int, 3> n{};
+  double voxels = 1;
+  for (int d = 0; d < 3; ++d) {
+    if (!(s.size_mm[d] > 0)) throw std::invalid_argument("phantom: the size must be positive");
+    n[d] = std::max(1, static_cast<int>(std::ceil(s.size_mm[d] / s.spacing_mm)));
+    voxels *= n[d];
+  }
+  if (voxels > std::numeric_limits<int>::max())
+    throw std::invalid_argument("phantom: " + std::to_string(voxels) + " voxels are too many; use a coarser spacing");
+  for (Volume<std::uint8_t>* v : {&p.labels, &p.image}) {
+    v->dimensions = n;
+    v->spacing_mm = {s.spacing_mm, s.spacing_mm, s.spacing_mm};
+    for (int d = 0; d < 3; ++d) v->origin_mm[d] = -0.5 * (n[d] - 1) * s.spacing_mm;
+    v->data.assign(std::size_t(voxels), 0);
+  }
+  for (int k = 0; k < n[2]; ++k)
+    for (int j = 0; j < n[1]; ++j)
+      for (int i = 0; i < n[0]; ++i) p.labels.data[p.labels.index(i, j, k)] = p.geometry.label_at(p.labels.position_mm(i, j, k));
+
+  // Speckle: |complex Gaussian| of a white field smoothed by a Gaussian kernel w, divided by its mean
+  // (each component then has variance sum w^2; |z| is Rayleigh with mean sigma sqrt(pi/2)).
+  std::vector<float> speckle;
+  if (s.speckle) {
+    Dice dice(s.seed ^ 0x9e3779b9u);
+    const std::size_t count = static_cast<std::size_t>(voxels);
+    std::vector<float> re(count), im(count);
+    for (std::size_t v = 0; v < re.size(); ++v) re[v] = static_cast<float>(dice.normal()), im[v] = static_cast<float>(dice.normal());
+    const auto w = gaussian_kernel(std::max(0.3, s.speckle_size_mm / s.spacing_mm / 2));
+    double w2 = 0;
+    for (double x : w) w2 += x * x;
+    for (int axis = 0; axis < 3; ++axis) smooth_axis(re, n, axis, w), smooth_axis(im, n, axis, w);
+    const double mean = std::sqrt(w2 * w2 * w2) * std::sqrt(M_PI / 2);
+    speckle.resize(re.size());
+    for (std::size_t v = 0; v < re.size(); ++v) speckle[v] = static_cast<float>(std::hypot(re[v], im[v]) / mean);
+  }
+
+  // Beams go down -z from the top face: attenuation with depth, and the energy each interface
+  // reflects is missing below it.
+  for (int j = 0; j < n[1]; ++j)
+    for (int i = 0; i < n[0]; ++i) {
+      double transmitted = 1;
+      for (int k = n[2] - 1; k >= 0; --k) {
+        const std::size_t v = p.labels.index(i, j, k);
+        const std::uint8_t label = p.labels.data[v];
+        if (s.shadowing && k < n[2] - 1) transmitted *= 1 - reflectance(p.labels.data[p.labels.index(i, j, k + 1)], label);
+        const double depth = (n[2] - 1 - k) * s.spacing_mm;
+        double value = echogenicity(label) * std::exp(-s.attenuation_per_mm * depth) * transmitted;
+        if (s.speckle) value *= speckle[v];
+        p.image.data[v] = static_cast<std::uint8_t>(std::clamp(std::lround(value), 0L, 255L));
+      }
+    }
+  return p;
+}
+
+}  // namespace fetouch::imaging

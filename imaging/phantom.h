@@ -1,0 +1,88 @@
+// A synthetic fetal ultrasound phantom: a procedurally generated fetus-like body (head with a bright
+// skull, trunk, four limbs) floating in amniotic fluid inside a uterine wall, inside soft tissue, with
+// its ground-truth label map, and rendered with the look of a 3D ultrasound volume:
+//   - echogenicity per tissue (fluid anechoic, wall and skull bright, fetus mid-grey);
+//   - multiplicative speckle: the magnitude of a complex Gaussian field smoothed over a speckle size
+//     (fully developed speckle: Rayleigh distributed, std/mean = sqrt(4/pi - 1) = 0.523);
+//   - depth attenuation along the beam (the probe sits above the volume, beams go down -z):
+//     exp(-mu depth);
+//   - shadowing: each interface a beam crosses reflects part of its energy (the skull most), so the
+//     region below a bright boundary is darker.
+// Everything follows from the seed: the same seed gives the same bytes.
+//
+// Units: millimetres (an image); the volume is centred on the origin.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace fetouch::imaging {
+
+// A scalar volume: x fastest, then y, then z.
+template <class T>
+struct Volume {
+  std::array<int, 3> dimensions{0, 0, 0};
+  std::array<double, 3> spacing_mm{1, 1, 1};
+  std::array<double, 3> origin_mm{0, 0, 0};  // centre of voxel (0, 0, 0)
+  std::vector<T> data;
+  std::size_t index(int i, int j, int k) const {
+    return (std::size_t(k) * dimensions[1] + j) * dimensions[0] + i;
+  }
+  std::array<double, 3> position_mm(int i, int j, int k) const {
+    return {origin_mm[0] + i * spacing_mm[0], origin_mm[1] + j * spacing_mm[1], origin_mm[2] + k * spacing_mm[2]};
+  }
+  double voxel_volume_mm3() const { return spacing_mm[0] * spacing_mm[1] * spacing_mm[2]; }
+};
+
+enum PhantomLabel : std::uint8_t {
+  kTissue = 0,  // outside the uterus
+  kUterineWall = 1,
+  kAmnioticFluid = 2,
+  kHead = 3,
+  kSkull = 4,
+  kTrunk = 5,
+  kLimb = 6,
+};
+inline bool is_fetus(std::uint8_t label) { return label >= kHead; }
+
+struct PhantomSettings {
+  std::uint32_t seed = 1;
+  double spacing_mm = 1.0;
+  std::array<double, 3> size_mm{160, 130, 120};
+  bool speckle = true;
+  double speckle_size_mm = 1.2;       // correlation length of the speckle
+  double attenuation_per_mm = 0.006;  // mu, amplitude
+  bool shadowing = true;
+};
+
+// The shapes, after the seed's random variation: ellipsoids (centre, semi-axes, rotation about z)
+// and limbs (capsules between two points).
+struct PhantomGeometry {
+  struct Ellipsoid {
+    std::array<double, 3> centre{0, 0, 0}, radii{1, 1, 1};
+    double yaw = 0;  // rotation about z, rad
+  };
+  struct Capsule {
+    std::array<double, 3> a{0, 0, 0}, b{0, 0, 0};
+    double radius = 1;
+  };
+  Ellipsoid uterus_outer, uterus_inner, head, trunk;
+  double skull_thickness_mm = 3;
+  std::array<Capsule, 4> limbs;
+  // The label at a point, mm.
+  std::uint8_t label_at(const std::array<double, 3>& x) const;
+};
+
+struct Phantom {
+  PhantomGeometry geometry;
+  Volume<std::uint8_t> labels;
+  Volume<std::uint8_t> image;  // 0..255
+};
+
+PhantomGeometry phantom_geometry(std::uint32_t seed);
+// Throws std::invalid_argument for a spacing or size that is not positive, or a volume over 2^31 voxels.
+Phantom make_phantom(const PhantomSettings& settings);
+
+}  // namespace fetouch::imaging

@@ -1,0 +1,156 @@
+// The synthetic fetal phantom against what it is built from: the label volumes against the
+// ellipsoids' closed-form volumes, fully developed speckle's Rayleigh statistics (std/mean = 0.523),
+// depth attenuation exp(-mu depth), a shadow below the skull, reproducibility from the seed, and a
+// MetaImage round trip through VTK with spacing and origin kept.
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <map>
+
+#include "imaging/phantom.h"
+#include "imaging/volume_io.h"
+
+namespace fetouch::imaging {
+namespace {
+
+double ellipsoid_volume(const PhantomGeometry::Ellipsoid& e) { return 4.0 / 3 * M_PI * e.radii[0] * e.radii[1] * e.radii[2]; }
+
+std::map<int, double> label_volumes(const Phantom& p) {
+  std::map<int, double> v;
+  for (const auto label : p.labels.data) v[label] += p.labels.voxel_volume_mm3();
+  return v;
+}
+
+TEST(Phantom, LabelVolumesMatchTheEllipsoids) {
+  PhantomSettings s;
+  s.speckle = false;
+  const Phantom p = make_phantom(s);
+  auto v = label_volumes(p);
+  const double inner = ellipsoid_volume(p.geometry.uterus_inner), outer = ellipsoid_volume(p.geometry.uterus_outer);
+  double sac = 0, fetus = 0;
+  for (const auto& [label, volume] : v) {
+    if (label >= kAmnioticFluid) sac += volume;
+    if (is_fetus(static_cast<std::uint8_t>(label))) fetus += volume;
+  }
+  std::printf("sac %.0f mm^3 (ellipsoid %.0f), wall %.0f mm^3 (shell %.0f), fetus %.0f mm^3, fluid %.0f mm^3\n", sac, inner,
+              v[kUterineWall], outer - inner, fetus, v[kAmnioticFluid]);
+  EXPECT_NEAR(sac, inner, 0.01 * inner);
+  EXPECT_NEAR(v[kUterineWall], outer - inner, 0.03 * (outer - inner));
+  // The fetus: at most the sum of its parts, at least its largest part, and afloat (fluid around).
+  const double head = ellipsoid_volume(p.geometry.head), trunk = ellipsoid_volume(p.geometry.trunk);
+  EXPECT_GT(fetus, std::max(head, trunk));
+  EXPECT_GT(v[kAmnioticFluid], 0.3 * sac);
+  EXPECT_GT(v[kSkull], 0.0);
+  EXPECT_GT(v[kLimb], 0.0);
+}
+
+TEST(Phantom, SameSeedSameBytesOtherSeedOtherFetus) {
+  PhantomSettings s;
+  s.spacing_mm = 2;
+  const Phantom a = make_phantom(s), b = make_phantom(s);
+  EXPECT_EQ(a.image.data, b.image.data);
+  EXPECT_EQ(a.labels.data, b.labels.data);
+  s.seed = 2;
+  EXPECT_NE(make_phantom(s).labels.data, a.labels.data);
+}
+
+TEST(Phantom, SpeckleIsRayleighAndDepthAttenuates) {
+  PhantomSettings s;
+  s.shadowing = false;
+  const Phantom p = make_phantom(s);
+  // Tissue outside the uterus, by depth (voxel layers from the top): mean and spread.
+  const int nz = p.image.dimensions[2];
+  std::vector<double> sum(nz, 0), sum2(nz, 0), count(nz, 0);
+  for (int k = 0; k < nz; ++k)
+    for (int j = 0; j < p.image.dimensions[1]; ++j)
+      for (int i = 0; i < p.image.dimensions[0]; ++i) {
+        const std::size_t v = p.image.index(i, j, k);
+        if (p.labels.data[v] != kTissue) continue;
+        sum[k] += p.image.data[v], sum2[k] += double(p.image.data[v]) * p.image.data[v], count[k] += 1;
+      }
+  // Speckle: std/mean within a layer (one depth: one attenuation).
+  double ratio = 0;
+  int layers = 0;
+  for (int k = 5; k < nz - 5; k += 10) {
+    const double mean = sum[k] / count[k], var = sum2[k] / count[k] - mean * mean;
+    ratio += std::sqrt(var) / mean, ++layers;
+  }
+  ratio /= layers;
+  std::printf("speckle std/mean %.4f (Rayleigh %.4f)\n", ratio, std::sqrt(4 / M_PI - 1));
+  EXPECT_NEAR(ratio, std::sqrt(4 / M_PI - 1), 0.02);
+  // Attenuation: the layer means fall as exp(-mu depth).
+  const int top = nz - 6, bottom = 5;
+  const double measured = (sum[bottom] / count[bottom]) / (sum[top] / count[top]);
+  const double expected = std::exp(-s.attenuation_per_mm * (top - bottom) * s.spacing_mm);
+  std::printf("attenuation over %d mm: %.4f (exp(-mu d) %.4f)\n", top - bottom, measured, expected);
+  EXPECT_NEAR(measured, expected, 0.04 * expected);
+}
+
+TEST(Phantom, TheSkullCastsAShadow) {
+  PhantomSettings s;
+  s.speckle = false;
+  s.attenuation_per_mm = 0;
+  const Phantom shadowed = make_phantom(s);
+  s.shadowing = false;
+  const Phantom clear = make_phantom(s);
+  // The column through the head's centre, below the head: darker than without shadowing.
+  const auto& head = shadowed.geometry.head;
+  const auto& img = shadowed.image;
+  const int i = static_cast<int>(std::lround((head.centre[0] - img.origin_mm[0]) / img.spacing_mm[0]));
+  const int j = static_cast<int>(std::lround((head.centre[1] - img.origin_mm[1]) / img.spacing_mm[1]));
+  double below_shadowed = 0, below_clear = 0;
+  for (int k = 0; k < img.dimensions[2]; ++k) {
+    const auto x = img.position_mm(i, j, k);
+    if (x[2] > head.centre[2] - head.radii[2] - 2) continue;  // under the head only
+    below_shadowed += shadowed.image.data[img.index(i, j, k)];
+    below_clear += clear.image.data[img.index(i, j, k)];
+  }
+  std::printf("below the head: %.0f shadowed against %.0f without shadowing\n", below_shadowed, below_clear);
+  EXPECT_LT(below_shadowed, 0.5 * below_clear);  // two skull interfaces take 1 - 0.55^2 = 70 %
+}
+
+TEST(Phantom, MetaImageRoundTripKeepsVoxelsSpacingAndOrigin) {
+  PhantomSettings s;
+  s.spacing_mm = 2;
+  const Phantom p = make_phantom(s);
+  const auto path = std::filesystem::temp_directory_path() / ("phantom_" + std::to_string(::getpid()) + ".mha");
+  write_volume(p.image, path);
+  const Volume<float> back = read_volume(path);
+  std::filesystem::remove(path);
+  EXPECT_EQ(back.dimensions, p.image.dimensions);
+  for (int d = 0; d < 3; ++d) {
+    EXPECT_DOUBLE_EQ(back.spacing_mm[d], p.image.spacing_mm[d]);
+    EXPECT_NEAR(back.origin_mm[d], p.image.origin_mm[d], 1e-9);
+  }
+  ASSERT_EQ(back.data.size(), p.image.data.size());
+  for (std::size_t v = 0; v < back.data.size(); ++v) ASSERT_EQ(back.data[v], p.image.data[v]) << "voxel " << v;
+}
+
+TEST(Phantom, BadSettingsAndFilesAreRefused) {
+  PhantomSettings s;
+  s.spacing_mm = 0;
+  EXPECT_THROW(make_phantom(s), std::invalid_argument);
+  s.spacing_mm = 0.01;  // 16000 x 13000 x 12000 voxels
+  EXPECT_THROW(make_phantom(s), std::invalid_argument);
+  EXPECT_THROW(read_volume("/nonexistent/volume.mha"), std::runtime_error);
+  const auto path = std::filesystem::temp_directory_path() / ("short_" + std::to_string(::getpid()) + ".mha");
+  {
+    std::ofstream f(path);
+    f << "ObjectType = Image\nNDims = 3\nDimSize = 10 10 10\nElementType = MET_UCHAR\nElementDataFile = LOCAL\n"
+      << std::string(100, 'x');  // 100 of 1000 voxels
+  }
+  try {
+    read_volume(path);
+    ADD_FAILURE() << "a truncated volume was accepted";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find(path.string()), std::string::npos) << e.what();
+  }
+  std::filesystem::remove(path);
+}
+
+}  // namespace
+}  // namespace fetouch::imaging
