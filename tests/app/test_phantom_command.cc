@@ -1,4 +1,4 @@
-// `fetouch phantom`, the real binary: MetaImage volumes that VTK reads back with the dimensions,
+// `fetouch phantom` and `fetouch reconstruct`, the real binary. The phantom: MetaImage volumes that VTK reads back with the dimensions,
 // spacing and label volumes the summary reports, byte-identical for the same seed, and clear
 // refusals of bad options and unwritable folders.
 #include <gtest/gtest.h>
@@ -53,6 +53,37 @@ TEST(PhantomCommand, BadOptionsAndUnwritableFoldersAreRefused) {
   const auto folder = run_command(fetouch("phantom --spacing 4 --out /proc/fetouch_cannot_write"));
   EXPECT_EQ(folder.exit_code, 1);
   EXPECT_NE(folder.err.find("/proc/fetouch_cannot_write"), std::string::npos) << folder.err;
+}
+
+}  // namespace
+}  // namespace fetouch::testing
+
+namespace fetouch::testing {
+namespace {
+
+// `fetouch reconstruct` on the shared spine sweep: the volume it writes reads back with the
+// dimensions and origin it reports, which are PLUS's (147 x 106 x 104 at 0.5 mm).
+TEST(ReconstructCommand, WritesTheSpineVolumeItReports) {
+  const fs::path data = fs::path(FETOUCH_SOURCE_DIR) / ".." / "shared" / "data" / "ultrasound";
+  if (!fs::exists(data / "spine_phantom_freehand_sweep.igs.mha")) GTEST_SKIP() << "no shared data at " << data.string();
+  const fs::path out = fs::temp_directory_path() / ("fetouch_spine_" + std::to_string(::getpid()) + ".mha");
+  const auto r = run_command(fetouch("reconstruct --json " + (data / "spine_phantom_freehand_sweep.igs.mha").string() +
+                                     " --calibration " + (data / "spine_phantom_freehand_calibration.xml").string() +
+                                     " --out " + out.string()));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const YAML::Node j = YAML::Load(r.out);
+  const auto volume = imaging::read_volume(out);
+  const int expected[3] = {147, 106, 104};
+  for (int d = 0; d < 3; ++d) {
+    EXPECT_EQ(volume.dimensions[d], j["dimensions"][d].as<int>());
+    EXPECT_EQ(volume.dimensions[d], expected[d]);
+    EXPECT_NEAR(volume.origin_mm[d], j["origin_mm"][d].as<double>(), 1e-6);
+  }
+  fs::remove(out);
+  const auto bad = run_command(fetouch("reconstruct " + (data / "spine_phantom_freehand_sweep.igs.mha").string() +
+                                       " --calibration " + (data / "README.md").string()));
+  EXPECT_EQ(bad.exit_code, 2);
+  EXPECT_NE(bad.err.find("Image"), std::string::npos) << bad.err;
 }
 
 }  // namespace

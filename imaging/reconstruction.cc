@@ -1,0 +1,223 @@
+#include "imaging/reconstruction.h"
+
+#include <algorithm>
+#include <cmath>
+#include <fstream>
+#include <limits>
+#include <map>
+#include <regex>
+#include <sstream>
+#include <stdexcept>
+
+#include "imaging/volume_io.h"
+
+namespace fetouch::imaging {
+
+namespace {
+
+Matrix4 multiply(const Matrix4& a, const Matrix4& b) {
+  Matrix4 c{};
+  for (int i = 0; i < 4; ++i)
+    for (int j = 0; j < 4; ++j)
+      for (int k = 0; k < 4; ++k) c[4 * i + j] += a[4 * i + k] * b[4 * k + j];
+  return c;
+}
+
+// The inverse of a rigid transform [R t; 0 1]: [R' -R't; 0 1].
+Matrix4 rigid_inverse(const Matrix4& m) {
+  Matrix4 r{};
+  for (int i = 0; i < 3; ++i) {
+    for (int j = 0; j < 3; ++j) r[4 * i + j] = m[4 * j + i];
+    r[4 * i + 3] = -(m[i] * m[3] + m[4 + i] * m[7] + m[8 + i] * m[11]);
+  }
+  r[15] = 1;
+  return r;
+}
+
+std::array<double, 3> apply(const Matrix4& m, double x, double y) {
+  return {m[0] * x + m[1] * y + m[3], m[4] * x + m[5] * y + m[7], m[8] * x + m[9] * y + m[11]};
+}
+
+bool parse_matrix(const std::string& text, Matrix4& m) {
+  std::istringstream in(text);
+  for (double& v : m)
+    if (!(in >> v)) return false;
+  double extra;
+  return !(in >> extra);
+}
+
+}  // namespace
+
+TrackedSweep read_tracked_sweep(const std::filesystem::path& path) {
+  const std::string name = path.string();
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw std::runtime_error(name + ": cannot open the sweep");
+  std::map<std::string, std::string> fields;
+  std::string line;
+  while (std::getline(in, line)) {
+    const auto eq = line.find('=');
+    if (eq == std::string::npos) continue;
+    std::string key = line.substr(0, eq), value = line.substr(eq + 1);
+    key.erase(key.find_last_not_of(" \t\r") + 1);
+    value.erase(0, value.find_first_not_of(" \t"));
+    value.erase(value.find_last_not_of(" \t\r") + 1);
+    fields[key] = value;
+    if (key == "ElementDataFile") break;
+  }
+  TrackedSweep sweep;
+  const Volume<float> pixels = read_volume(path);
+  sweep.frames.dimensions = pixels.dimensions;
+  sweep.frames.spacing_mm = {1, 1, 1};
+  sweep.frames.data.resize(pixels.data.size());
+  std::transform(pixels.data.begin(), pixels.data.end(), sweep.frames.data.begin(),
+                 [](float v) { return static_cast<std::uint8_t>(std::clamp(v, 0.0f, 255.0f)); });
+  const int frames = pixels.dimensions[2];
+  sweep.poses.resize(frames);
+  for (int f = 0; f < frames; ++f) {
+    char prefix[32];
+    std::snprintf(prefix, sizeof prefix, "Seq_Frame%04d_", f);
+    auto& pose = sweep.poses[f];
+    pose.valid = true;
+    for (const auto& [suffix, matrix] : {std::pair<const char*, Matrix4*>{"ProbeToTrackerTransform", &pose.probe_to_tracker},
+                                         {"ReferenceToTrackerTransform", &pose.reference_to_tracker}}) {
+      const std::string key = std::string(prefix) + suffix;
+      const auto found = fields.find(key);
+      if (found == fields.end()) throw std::runtime_error(name + ": frame " + std::to_string(f) + " has no " + key);
+      if (!parse_matrix(found->second, *matrix))
+        throw std::runtime_error(name + ": " + key + " is not 16 numbers: '" + found->second + "'");
+      const auto status = fields.find(key + "Status");
+      if (status != fields.end() && status->second != "OK") pose.valid = false;
+    }
+  }
+  return sweep;
+}
+
+Matrix4 read_image_to_probe(const std::filesystem::path& path) {
+  const std::string name = path.string();
+  std::ifstream in(path);
+  if (!in) throw std::runtime_error(name + ": cannot open the calibration");
+  const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const std::regex transform(R"re(<Transform\s+From="Image"\s+To="Probe"\s+Matrix="([^"]*)")re");
+  std::smatch match;
+  if (!std::regex_search(text, match, transform))
+    throw std::runtime_error(name + ": no <Transform From=\"Image\" To=\"Probe\" Matrix=\"...\"> element");
+  Matrix4 m;
+  if (!parse_matrix(match[1].str(), m)) throw std::runtime_error(name + ": the Image-to-Probe matrix is not 16 numbers");
+  return m;
+}
+
+Reconstruction reconstruct(const TrackedSweep& sweep, const Matrix4& image_to_probe, const ReconstructionSettings& s) {
+  if (!(s.spacing_mm > 0)) throw std::invalid_argument("reconstruction: the spacing must be positive");
+  const int width = sweep.frames.dimensions[0], height = sweep.frames.dimensions[1];
+  std::vector<Matrix4> to_reference;
+  std::vector<int> frame_index;
+  Reconstruction out;
+  for (int f = 0; f < static_cast<int>(sweep.poses.size()); ++f) {
+    if (!sweep.poses[f].valid) {
+      ++out.frames_skipped;
+      continue;
+    }
+    to_reference.push_back(
+        multiply(multiply(rigid_inverse(sweep.poses[f].reference_to_tracker), sweep.poses[f].probe_to_tracker), image_to_probe));
+    frame_index.push_back(f);
+  }
+  out.frames_used = static_cast<int>(to_reference.size());
+  if (to_reference.empty()) throw std::runtime_error("reconstruction: no frame has a valid pose");
+  // The box of all frames' corners (pixel centres).
+  std::array<double, 3> lo{}, hi{};
+  lo.fill(std::numeric_limits<double>::max());
+  hi.fill(std::numeric_limits<double>::lowest());
+  for (const Matrix4& m : to_reference)
+    for (const double x : {0.0, double(width - 1)})
+      for (const double y : {0.0, double(height - 1)}) {
+        const auto p = apply(m, x, y);
+        for (int d = 0; d < 3; ++d) lo[d] = std::min(lo[d], p[d]), hi[d] = std::max(hi[d], p[d]);
+      }
+  Volume<std::uint8_t>& v = out.volume;
+  double voxels = 1;
+  for (int d = 0; d < 3; ++d) {
+    v.dimensions[d] = static_cast<int>(std::floor((hi[d] - lo[d]) / s.spacing_mm)) + 1;
+    v.spacing_mm[d] = s.spacing_mm;
+    v.origin_mm[d] = lo[d];
+    voxels *= v.dimensions[d];
+  }
+  if (voxels > 1e9) throw std::invalid_argument("reconstruction: " + std::to_string(voxels) + " voxels; use a coarser spacing");
+  const std::size_t count = static_cast<std::size_t>(voxels);
+  std::vector<float> sum(count, 0.0f), weight(count, 0.0f);
+  const auto paste = [&](std::size_t at, float value, float w) {
+    if (s.maximum) {
+      sum[at] = weight[at] > 0 ? std::max(sum[at], value) : value;
+      weight[at] = std::max(weight[at], w);
+    } else {
+      sum[at] += w * value;
+      weight[at] += w;
+    }
+  };
+  for (std::size_t k = 0; k < to_reference.size(); ++k) {
+    const Matrix4& m = to_reference[k];
+    const std::uint8_t* frame = sweep.frames.data.data() + std::size_t(frame_index[k]) * width * height;
+    for (int y = 0; y < height; ++y)
+      for (int x = 0; x < width; ++x) {
+        const auto p = apply(m, x, y);
+        double g[3];
+        for (int d = 0; d < 3; ++d) g[d] = (p[d] - v.origin_mm[d]) / s.spacing_mm;
+        const float value = frame[std::size_t(y) * width + x];
+        if (!s.linear) {
+          const int i = static_cast<int>(std::lround(g[0])), j = static_cast<int>(std::lround(g[1])),
+                    l = static_cast<int>(std::lround(g[2]));
+          if (i < 0 || j < 0 || l < 0 || i >= v.dimensions[0] || j >= v.dimensions[1] || l >= v.dimensions[2]) continue;
+          paste(v.index(i, j, l), value, 1.0f);
+          continue;
+        }
+        const int i0 = static_cast<int>(std::floor(g[0])), j0 = static_cast<int>(std::floor(g[1])),
+                  l0 = static_cast<int>(std::floor(g[2]));
+        const double fx = g[0] - i0, fy = g[1] - j0, fz = g[2] - l0;
+        for (int c = 0; c < 8; ++c) {
+          const int i = i0 + (c & 1), j = j0 + ((c >> 1) & 1), l = l0 + ((c >> 2) & 1);
+          if (i < 0 || j < 0 || l < 0 || i >= v.dimensions[0] || j >= v.dimensions[1] || l >= v.dimensions[2]) continue;
+          const double w = ((c & 1) ? fx : 1 - fx) * (((c >> 1) & 1) ? fy : 1 - fy) * (((c >> 2) & 1) ? fz : 1 - fz);
+          if (w > 0) paste(v.index(i, j, l), value, static_cast<float>(w));
+        }
+      }
+  }
+  v.data.assign(count, 0);
+  std::vector<bool> filled(count, false);
+  for (std::size_t a = 0; a < count; ++a)
+    if (weight[a] > 0) {
+      const double value = s.maximum ? sum[a] : sum[a] / weight[a];
+      v.data[a] = static_cast<std::uint8_t>(std::clamp(std::lround(value), 0L, 255L));
+      filled[a] = true;
+    }
+  std::size_t filled_count = std::count(filled.begin(), filled.end(), true);
+  if (s.fill_holes) {
+    // A hole surrounded by filled voxels (more than half its neighbourhood) takes their mean.
+    const int r = std::max(1, s.fill_radius);
+    std::vector<std::uint8_t> result = v.data;
+    for (int l = 0; l < v.dimensions[2]; ++l)
+      for (int j = 0; j < v.dimensions[1]; ++j)
+        for (int i = 0; i < v.dimensions[0]; ++i) {
+          const std::size_t a = v.index(i, j, l);
+          if (filled[a]) continue;
+          double total = 0;
+          int n = 0, neighbours = 0;
+          for (int dl = -r; dl <= r; ++dl)
+            for (int dj = -r; dj <= r; ++dj)
+              for (int di = -r; di <= r; ++di) {
+                const int ii = i + di, jj = j + dj, ll = l + dl;
+                if (ii < 0 || jj < 0 || ll < 0 || ii >= v.dimensions[0] || jj >= v.dimensions[1] || ll >= v.dimensions[2]) continue;
+                ++neighbours;
+                const std::size_t b = v.index(ii, jj, ll);
+                if (filled[b]) total += v.data[b], ++n;
+              }
+          if (2 * n > neighbours) {
+            result[a] = static_cast<std::uint8_t>(std::lround(total / n));
+            ++filled_count;
+          }
+        }
+    v.data.swap(result);
+  }
+  out.filled_fraction = double(filled_count) / double(count);
+  return out;
+}
+
+}  // namespace fetouch::imaging
