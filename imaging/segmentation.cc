@@ -1,0 +1,222 @@
+#include "imaging/segmentation.h"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+#include <vector>
+
+namespace fetouch::imaging {
+
+namespace {
+
+template <class T, class U>
+Volume<T> like(const Volume<U>& v) {
+  Volume<T> out;
+  out.dimensions = v.dimensions, out.spacing_mm = v.spacing_mm, out.origin_mm = v.origin_mm;
+  out.data.assign(v.data.size(), T{});
+  return out;
+}
+
+bool on_face(const std::array<int, 3>& n, int i, int j, int k) {
+  return i == 0 || j == 0 || k == 0 || i == n[0] - 1 || j == n[1] - 1 || k == n[2] - 1;
+}
+
+// Labels the 6-connected components of the voxels where `inside(value)`; returns the label per
+// voxel (0 outside) and each component's size and whether it touches a face.
+template <class Inside>
+std::vector<int> label_components(const Mask& m, Inside inside, std::vector<std::size_t>& sizes, std::vector<bool>& touches) {
+  const auto& n = m.dimensions;
+  std::vector<int> label(m.data.size(), 0);
+  sizes.assign(1, 0);
+  touches.assign(1, false);
+  std::vector<std::size_t> stack;
+  for (std::size_t start = 0; start < m.data.size(); ++start) {
+    if (label[start] != 0 || !inside(m.data[start])) continue;
+    const int id = static_cast<int>(sizes.size());
+    sizes.push_back(0);
+    touches.push_back(false);
+    label[start] = id;
+    stack.push_back(start);
+    while (!stack.empty()) {
+      const std::size_t a = stack.back();
+      stack.pop_back();
+      ++sizes[id];
+      const int i = static_cast<int>(a % n[0]), j = static_cast<int>((a / n[0]) % n[1]), k = static_cast<int>(a / (std::size_t(n[0]) * n[1]));
+      if (on_face(n, i, j, k)) touches[id] = true;
+      const int offsets[6][3] = {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}};
+      for (const auto& o : offsets) {
+        const int ii = i + o[0], jj = j + o[1], kk = k + o[2];
+        if (ii < 0 || jj < 0 || kk < 0 || ii >= n[0] || jj >= n[1] || kk >= n[2]) continue;
+        const std::size_t b = m.index(ii, jj, kk);
+        if (label[b] == 0 && inside(m.data[b])) label[b] = id, stack.push_back(b);
+      }
+    }
+  }
+  return label;
+}
+
+void smooth_axis(std::vector<float>& data, const std::array<int, 3>& n, int axis, const std::vector<double>& w) {
+  const int half = static_cast<int>(w.size() / 2);
+  const std::size_t stride = axis == 0 ? 1 : axis == 1 ? std::size_t(n[0]) : std::size_t(n[0]) * n[1];
+  const int a1 = axis == 0 ? 1 : 0, a2 = axis == 2 ? 1 : 2;
+  std::vector<float> line(n[axis]);
+  for (int p = 0; p < n[a2]; ++p)
+    for (int q = 0; q < n[a1]; ++q) {
+      std::array<int, 3> s{0, 0, 0};
+      s[a1] = q, s[a2] = p;
+      const std::size_t base = (std::size_t(s[2]) * n[1] + s[1]) * n[0] + s[0];
+      for (int i = 0; i < n[axis]; ++i) line[i] = data[base + i * stride];
+      for (int i = 0; i < n[axis]; ++i) {
+        double sum = 0, weight = 0;  // renormalised at the faces
+        for (int k = -half; k <= half; ++k)
+          if (i + k >= 0 && i + k < n[axis]) sum += w[k + half] * line[i + k], weight += w[k + half];
+        data[base + i * stride] = static_cast<float>(sum / weight);
+      }
+    }
+}
+
+}  // namespace
+
+Volume<float> gaussian_smooth(const Volume<float>& v, double sigma_mm) {
+  Volume<float> out = v;
+  if (!(sigma_mm > 0)) return out;
+  for (int axis = 0; axis < 3; ++axis) {
+    const double sigma = sigma_mm / v.spacing_mm[axis];
+    const int half = std::max(1, static_cast<int>(std::ceil(3 * sigma)));
+    std::vector<double> w(2 * half + 1);
+    for (int k = -half; k <= half; ++k) w[k + half] = std::exp(-0.5 * k * k / (sigma * sigma));
+    smooth_axis(out.data, v.dimensions, axis, w);
+  }
+  return out;
+}
+
+Volume<float> median3(const Volume<float>& v) {
+  Volume<float> out = v;
+  const auto& n = v.dimensions;
+  std::array<float, 27> window;
+  for (int k = 0; k < n[2]; ++k)
+    for (int j = 0; j < n[1]; ++j)
+      for (int i = 0; i < n[0]; ++i) {
+        int count = 0;
+        for (int dk = -1; dk <= 1; ++dk)
+          for (int dj = -1; dj <= 1; ++dj)
+            for (int di = -1; di <= 1; ++di) {
+              const int ii = i + di, jj = j + dj, kk = k + dk;
+              if (ii < 0 || jj < 0 || kk < 0 || ii >= n[0] || jj >= n[1] || kk >= n[2]) continue;
+              window[count++] = v.data[v.index(ii, jj, kk)];
+            }
+        std::nth_element(window.begin(), window.begin() + count / 2, window.begin() + count);
+        out.data[v.index(i, j, k)] = window[count / 2];
+      }
+  return out;
+}
+
+Volume<float> compensate_depth(const Volume<float>& v, double attenuation_per_mm) {
+  Volume<float> out = v;
+  const auto& n = v.dimensions;
+  for (int k = 0; k < n[2]; ++k) {
+    const float gain = static_cast<float>(std::exp(attenuation_per_mm * (n[2] - 1 - k) * v.spacing_mm[2]));
+    for (std::size_t a = std::size_t(k) * n[0] * n[1]; a < std::size_t(k + 1) * n[0] * n[1]; ++a) out.data[a] *= gain;
+  }
+  return out;
+}
+
+Mask threshold(const Volume<float>& v, float low, float high) {
+  Mask m = like<std::uint8_t>(v);
+  for (std::size_t a = 0; a < v.data.size(); ++a) m.data[a] = v.data[a] >= low && v.data[a] <= high;
+  return m;
+}
+
+Mask connected_component(const Mask& mask, ComponentChoice choice, std::array<int, 3> seed) {
+  std::vector<std::size_t> sizes;
+  std::vector<bool> touches;
+  const std::vector<int> label = label_components(mask, [](std::uint8_t x) { return x != 0; }, sizes, touches);
+  int chosen = 0;
+  if (choice == ComponentChoice::containing_seed) {
+    for (int d = 0; d < 3; ++d)
+      if (seed[d] < 0 || seed[d] >= mask.dimensions[d]) throw std::runtime_error("segmentation: the seed is outside the volume");
+    chosen = label[mask.index(seed[0], seed[1], seed[2])];
+    if (chosen == 0) throw std::runtime_error("segmentation: the seed voxel is not in the thresholded region");
+  } else {
+    for (std::size_t c = 1; c < sizes.size(); ++c)
+      if ((choice == ComponentChoice::largest || !touches[c]) && (chosen == 0 || sizes[c] > sizes[chosen])) chosen = static_cast<int>(c);
+    if (chosen == 0)
+      throw std::runtime_error(choice == ComponentChoice::largest
+                                   ? "segmentation is empty: no voxel passed the threshold"
+                                   : "segmentation is empty: every region above the threshold touches the volume's faces");
+  }
+  Mask out = like<std::uint8_t>(mask);
+  for (std::size_t a = 0; a < label.size(); ++a) out.data[a] = label[a] == chosen;
+  return out;
+}
+
+namespace {
+
+Mask morph(const Mask& m, int radius, bool dilate) {
+  Mask out = like<std::uint8_t>(m);
+  const auto& n = m.dimensions;
+  std::vector<std::array<int, 3>> ball;
+  for (int dk = -radius; dk <= radius; ++dk)
+    for (int dj = -radius; dj <= radius; ++dj)
+      for (int di = -radius; di <= radius; ++di)
+        if (di * di + dj * dj + dk * dk <= radius * radius) ball.push_back({di, dj, dk});
+  for (int k = 0; k < n[2]; ++k)
+    for (int j = 0; j < n[1]; ++j)
+      for (int i = 0; i < n[0]; ++i) {
+        bool value = !dilate;
+        for (const auto& o : ball) {
+          const int ii = i + o[0], jj = j + o[1], kk = k + o[2];
+          const bool in = ii >= 0 && jj >= 0 && kk >= 0 && ii < n[0] && jj < n[1] && kk < n[2];
+          const bool set = in && m.data[m.index(ii, jj, kk)];
+          if (dilate && set) { value = true; break; }
+          if (!dilate && !set) { value = false; break; }
+        }
+        out.data[m.index(i, j, k)] = value;
+      }
+  return out;
+}
+
+}  // namespace
+
+Mask close(const Mask& mask, int radius) {
+  if (radius <= 0) return mask;
+  // Outside the volume counts as background.
+  return morph(morph(mask, radius, true), radius, false);
+}
+
+Mask fill_holes(const Mask& mask) {
+  std::vector<std::size_t> sizes;
+  std::vector<bool> touches;
+  const std::vector<int> label = label_components(mask, [](std::uint8_t x) { return x == 0; }, sizes, touches);
+  Mask out = mask;
+  for (std::size_t a = 0; a < label.size(); ++a)
+    if (label[a] != 0 && !touches[label[a]]) out.data[a] = 1;  // background enclosed by the object
+  return out;
+}
+
+Mask segment_fetus(const Volume<float>& image, const FetusSegmentation& s) {
+  Volume<float> v = gaussian_smooth(image, s.smoothing_mm);
+  if (s.attenuation_per_mm > 0) v = compensate_depth(v, s.attenuation_per_mm);
+  // The low threshold's object, holes filled, less the band by which its boundary lies outside the
+  // high threshold's: its interior (the brain inside the skull) joins the high threshold's mask.
+  const Mask low = fill_holes(close(
+      connected_component(threshold(v, s.low_threshold, 1e30f), ComponentChoice::largest_interior), s.closing_radius));
+  const Mask interior = morph(low, s.closing_radius, /*dilate=*/false);
+  Mask high = threshold(v, s.threshold, 1e30f);
+  for (std::size_t a = 0; a < high.data.size(); ++a)
+    if (interior.data[a]) high.data[a] = 1;
+  return fill_holes(close(connected_component(high, ComponentChoice::largest_interior), s.closing_radius));
+}
+
+double dice(const Mask& a, const Mask& b) {
+  if (a.dimensions != b.dimensions) throw std::invalid_argument("dice: the masks differ in size");
+  std::size_t both = 0, na = 0, nb = 0;
+  for (std::size_t i = 0; i < a.data.size(); ++i) {
+    both += a.data[i] && b.data[i];
+    na += a.data[i] != 0;
+    nb += b.data[i] != 0;
+  }
+  return na + nb == 0 ? 1.0 : 2.0 * double(both) / double(na + nb);
+}
+
+}  // namespace fetouch::imaging

@@ -1,0 +1,49 @@
+// Filters and segmentation on volumes (imaging/phantom.h's Volume), in voxel units unless a name
+// says mm:
+//   - speckle reduction: Gaussian smoothing (separable, sigma in mm) and the 3 x 3 x 3 median;
+//   - time-gain compensation: undoing the depth attenuation exp(-mu d) along -z beams;
+//   - threshold: voxels within [low, high] -> mask;
+//   - connected components (6-connectivity): the largest, the largest that does not touch the
+//     volume's faces (an object floating in fluid), or the one holding a seed (region growing);
+//   - morphology: closing by a ball (dilation then erosion) and filling enclosed holes (background
+//     voxels not connected to the volume's faces).
+// Masks are 0/1 volumes.
+#pragma once
+
+#include <array>
+#include <cstdint>
+
+#include "imaging/phantom.h"
+
+namespace fetouch::imaging {
+
+using Mask = Volume<std::uint8_t>;
+
+Volume<float> gaussian_smooth(const Volume<float>& v, double sigma_mm);
+Volume<float> median3(const Volume<float>& v);
+Volume<float> compensate_depth(const Volume<float>& v, double attenuation_per_mm);
+Mask threshold(const Volume<float>& v, float low, float high);
+
+enum class ComponentChoice { largest, largest_interior, containing_seed };
+// Throws std::runtime_error when there is no such component (an empty segmentation), naming why.
+Mask connected_component(const Mask& mask, ComponentChoice choice, std::array<int, 3> seed = {0, 0, 0});
+Mask close(const Mask& mask, int radius);
+Mask fill_holes(const Mask& mask);
+
+// The fetus of a phantom image (or a real fetal volume of the same look): smoothing, depth
+// compensation, a threshold between fluid and tissue, the largest component floating in the fluid,
+// closing and hole filling. A shadow (under the skull) can darken the far side of a bright shell below
+// that threshold and leave it open: what a lower threshold's closed shell encloses is added.
+struct FetusSegmentation {
+  double smoothing_mm = 1.5;
+  double attenuation_per_mm = 0.006;  // 0: no compensation
+  float threshold = 45;      // between fluid and tissue: where the boundary lies
+  float low_threshold = 20;  // through shadows: closes the skull, so the brain it encloses is found
+  int closing_radius = 2;
+};
+Mask segment_fetus(const Volume<float>& image, const FetusSegmentation& settings);
+
+// Dice coefficient 2|A n B| / (|A| + |B|) of two masks of the same dimensions.
+double dice(const Mask& a, const Mask& b);
+
+}  // namespace fetouch::imaging
