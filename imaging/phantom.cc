@@ -1,5 +1,7 @@
 #include "imaging/phantom.h"
 
+#include "imaging/separable_filter.h"
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -75,38 +77,6 @@ double reflectance(std::uint8_t above, std::uint8_t below) {
   if (above == kSkull || below == kSkull) return 0.45;
   if (above == kAmnioticFluid || below == kAmnioticFluid) return 0.08;
   return 0.03;
-}
-
-// A normalised 1D Gaussian kernel of standard deviation sigma (voxels), truncated at 3 sigma.
-std::vector<double> gaussian_kernel(double sigma) {
-  const int half = std::max(1, static_cast<int>(std::ceil(3 * sigma)));
-  std::vector<double> w(2 * half + 1);
-  double sum = 0;
-  for (int k = -half; k <= half; ++k) sum += w[k + half] = std::exp(-0.5 * k * k / (sigma * sigma));
-  for (double& v : w) v /= sum;
-  return w;
-}
-
-// Separable convolution along one axis, periodic (so the speckle is statistically the same
-// everywhere, up to the volume's faces).
-void smooth_axis(std::vector<float>& field, const std::array<int, 3>& n, int axis, const std::vector<double>& w) {
-  const int half = static_cast<int>(w.size() / 2);
-  const std::size_t stride = axis == 0 ? 1 : axis == 1 ? std::size_t(n[0]) : std::size_t(n[0]) * n[1];
-  std::vector<float> line(n[axis]), out(n[axis]);
-  const int a1 = axis == 0 ? 1 : 0, a2 = axis == 2 ? 1 : 2;
-  for (int p = 0; p < n[a2]; ++p)
-    for (int q = 0; q < n[a1]; ++q) {
-      std::array<int, 3> start{0, 0, 0};
-      start[a1] = q, start[a2] = p;
-      const std::size_t base = (std::size_t(start[2]) * n[1] + start[1]) * n[0] + start[0];
-      for (int i = 0; i < n[axis]; ++i) line[i] = field[base + i * stride];
-      for (int i = 0; i < n[axis]; ++i) {
-        double sum = 0;
-        for (int k = -half; k <= half; ++k) sum += w[k + half] * line[((i + k) % n[axis] + n[axis]) % n[axis]];
-        out[i] = static_cast<float>(sum);
-      }
-      for (int i = 0; i < n[axis]; ++i) field[base + i * stride] = out[i];
-    }
 }
 
 }  // namespace
@@ -186,7 +156,8 @@ Phantom make_phantom(const PhantomSettings& s) {
     const auto w = gaussian_kernel(std::max(0.3, s.speckle_size_mm / s.spacing_mm / 2));
     double w2 = 0;
     for (double x : w) w2 += x * x;
-    for (int axis = 0; axis < 3; ++axis) smooth_axis(re, n, axis, w), smooth_axis(im, n, axis, w);
+    for (int axis = 0; axis < 3; ++axis)
+      convolve_axis(re, n, axis, w, Faces::periodic), convolve_axis(im, n, axis, w, Faces::periodic);
     const double mean = std::sqrt(w2 * w2 * w2) * std::sqrt(M_PI / 2);
     speckle.resize(re.size());
     for (std::size_t v = 0; v < re.size(); ++v) speckle[v] = static_cast<float>(std::hypot(re[v], im[v]) / mean);

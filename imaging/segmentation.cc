@@ -1,5 +1,7 @@
 #include "imaging/segmentation.h"
 
+#include "imaging/separable_filter.h"
+
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
@@ -55,37 +57,13 @@ std::vector<int> label_components(const Mask& m, Inside inside, std::vector<std:
   return label;
 }
 
-void smooth_axis(std::vector<float>& data, const std::array<int, 3>& n, int axis, const std::vector<double>& w) {
-  const int half = static_cast<int>(w.size() / 2);
-  const std::size_t stride = axis == 0 ? 1 : axis == 1 ? std::size_t(n[0]) : std::size_t(n[0]) * n[1];
-  const int a1 = axis == 0 ? 1 : 0, a2 = axis == 2 ? 1 : 2;
-  std::vector<float> line(n[axis]);
-  for (int p = 0; p < n[a2]; ++p)
-    for (int q = 0; q < n[a1]; ++q) {
-      std::array<int, 3> s{0, 0, 0};
-      s[a1] = q, s[a2] = p;
-      const std::size_t base = (std::size_t(s[2]) * n[1] + s[1]) * n[0] + s[0];
-      for (int i = 0; i < n[axis]; ++i) line[i] = data[base + i * stride];
-      for (int i = 0; i < n[axis]; ++i) {
-        double sum = 0, weight = 0;  // renormalised at the faces
-        for (int k = -half; k <= half; ++k)
-          if (i + k >= 0 && i + k < n[axis]) sum += w[k + half] * line[i + k], weight += w[k + half];
-        data[base + i * stride] = static_cast<float>(sum / weight);
-      }
-    }
-}
-
 }  // namespace
 
 Volume<float> gaussian_smooth(const Volume<float>& v, double sigma_mm) {
   Volume<float> out = v;
   if (!(sigma_mm > 0)) return out;
   for (int axis = 0; axis < 3; ++axis) {
-    const double sigma = sigma_mm / v.spacing_mm[axis];
-    const int half = std::max(1, static_cast<int>(std::ceil(3 * sigma)));
-    std::vector<double> w(2 * half + 1);
-    for (int k = -half; k <= half; ++k) w[k + half] = std::exp(-0.5 * k * k / (sigma * sigma));
-    smooth_axis(out.data, v.dimensions, axis, w);
+    convolve_axis(out.data, v.dimensions, axis, gaussian_kernel(sigma_mm / v.spacing_mm[axis]), Faces::renormalised);
   }
   return out;
 }
