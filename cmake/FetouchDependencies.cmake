@@ -19,7 +19,7 @@ endif()
 find_package(VTK 9 REQUIRED COMPONENTS
   CommonCore CommonDataModel CommonExecutionModel
   IOImage IOXML IOLegacy
-  ImagingCore ImagingGeneral FiltersCore FiltersGeneral
+  ImagingCore ImagingGeneral FiltersCore FiltersGeneral FiltersModeling FiltersVerdict
   ChartsCore ViewsContext2D RenderingCore RenderingOpenGL2 RenderingContextOpenGL2
   RenderingFreeType InteractionStyle)
 

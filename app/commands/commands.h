@@ -13,5 +13,6 @@ void add_stability_command(CLI::App& parent, int& exit_code);
 void add_solve_command(CLI::App& parent, int& exit_code);
 void add_phantom_command(CLI::App& parent, int& exit_code);
 void add_reconstruct_command(CLI::App& parent, int& exit_code);
+void add_mesh_command(CLI::App& parent, int& exit_code);
 
 }  // namespace fetouch::app

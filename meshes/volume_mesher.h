@@ -1,0 +1,69 @@
+// From a segmented volume (a 0/1 mask in millimetres) to a tetrahedral simulation mesh (metres):
+//   1. surface extraction: the mask, lightly smoothed, contoured at 0.5 by VTK's flying edges;
+//   2. clean-up: windowed-sinc smoothing (which does not shrink), the largest connected piece only,
+//      quadric decimation towards the target element size; the surface must come out closed and
+//      manifold (no boundary or non-manifold edge), else it is refused;
+//   3. volume meshing by Gmsh inside that surface (kept as the mesh's boundary) at the target size,
+//      then Gmsh's optimisation (and Netgen's) for quality;
+//   4. a quality report: dihedral angles and radius ratios (minimum and histogram), inverted and
+//      degenerate elements;
+//   5. output as Gmsh .msh 4.1 (physical groups `surface` and `tissue`) and VTK .vtu (the
+//      fem/vtu_mesh.h convention: boundary triangles with boundary_id, boundary_names), optionally
+//      partitioned by METIS through Gmsh.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <filesystem>
+#include <functional>
+#include <string>
+#include <vector>
+
+namespace fetouch::meshes {
+
+struct MaskVolume {
+  std::array<int, 3> dimensions{0, 0, 0};
+  std::array<double, 3> spacing_mm{1, 1, 1};
+  std::array<double, 3> origin_mm{0, 0, 0};
+  std::vector<std::uint8_t> data;  // 0/1, x fastest
+};
+
+struct MeshingSettings {
+  double element_size_mm = 4;
+  int smoothing_iterations = 20;
+  int partitions = 0;  // > 1: METIS partitions (Gmsh)
+  // Progress of the long steps: (step name, fraction of the whole done).
+  std::function<void(const std::string&, double)> progress;
+};
+
+struct QualityReport {
+  double min_dihedral_deg = 0, max_dihedral_deg = 0;
+  std::array<long, 18> dihedral_histogram{};  // 10-degree bins, 0..180
+  double min_radius_ratio = 0;                // 3 r_inscribed / R_circumscribed: 1 regular, 0 flat
+  std::array<long, 10> radius_ratio_histogram{};  // 0.1 bins
+  long inverted = 0, degenerate = 0;
+};
+
+struct VolumeMesh {
+  std::vector<std::array<double, 3>> nodes_m;
+  std::vector<std::array<int, 4>> tetrahedra;  // positively oriented
+  std::vector<std::array<int, 3>> boundary;    // surface triangles, outward
+  QualityReport quality;
+  double volume_m3 = 0;
+  double segmented_volume_m3 = 0;  // voxels x voxel volume
+  long surface_triangles = 0;
+  bool closed_manifold = false;
+  bool surface_remeshed = false;  // Gmsh parametrised and remeshed the surface (else kept as decimated)
+};
+
+// Throws std::runtime_error: an empty mask, a surface that is not closed or not manifold after
+// repair, a target size too small for the memory (more than 20 million elements estimated), Gmsh
+// failing.
+VolumeMesh mesh_mask(const MaskVolume& mask, const MeshingSettings& settings);
+
+QualityReport mesh_quality(const std::vector<std::array<double, 3>>& nodes, const std::vector<std::array<int, 4>>& tets);
+
+// Writes .msh (4.1) or .vtu by extension; throws std::runtime_error naming the file.
+void write_volume_mesh(const VolumeMesh& mesh, const std::filesystem::path& path, int partitions = 0);
+
+}  // namespace fetouch::meshes
