@@ -12,6 +12,7 @@
 #include <iomanip>
 #include <iostream>
 #include <memory>
+#include <optional>
 #include <sstream>
 
 #include "app/commands/commands.h"
@@ -19,6 +20,7 @@
 #include "app/json_writer.h"
 #include "app/log.h"
 #include "app/mpi_session.h"
+#include "app/progress.h"
 #include "config/scene_loader.h"
 #include "fem/tissue_model.h"
 
@@ -35,12 +37,21 @@ struct SolveOptions {
   std::vector<double> points;  // groups of three
   double radius_m = 0;         // 0: the scene's first probe radius
   int steps = 4;
+  double duration_s = 0.5;  // scenes with inertia: the simulated time
   bool json = false;
+};
+
+// One time step of a dynamic load case.
+struct TimeStep {
+  double t = 0;
+  int newton_iterations = 0;
+  double max_displacement_m = 0;
+  dealii::Tensor<1, 3> probe_displacement;  // the first probe's, if any
 };
 
 void write_json(std::ostream& out, const SolveOptions& o, const config::Scene& scene, const fem::TissueModel& model,
                 const fem::SolveReport& report, double seconds, const std::vector<int>& patches,
-                const fs::path& vtu, const fs::path& pvd) {
+                const fs::path& vtu, const fs::path& pvd, const std::vector<TimeStep>& series) {
   JsonWriter json(out);
   fem::QuasiStaticSolver& solver = *model.solver;
   json.begin_object();
@@ -66,6 +77,26 @@ void write_json(std::ostream& out, const SolveOptions& o, const config::Scene& s
     json.end_object();
   }
   json.end_array();
+  if (!series.empty()) {
+    json.key("dynamic").begin_object();
+    json.key("integrator").value(config::to_string(scene.effects.integrator));
+    json.key("time_step_s").value(series.size() > 1 ? series[1].t - series[0].t : series[0].t);
+    json.key("time_steps").begin_array();
+    for (const TimeStep& step : series) {
+      json.begin_object();
+      json.key("t_s").value(step.t);
+      json.key("newton_iterations").value(static_cast<long>(step.newton_iterations));
+      json.key("max_displacement_m").value(step.max_displacement_m);
+      if (!patches.empty()) {
+        json.key("probe_displacement_m").begin_array();
+        for (int d = 0; d < 3; ++d) json.value(step.probe_displacement[d]);
+        json.end_array();
+      }
+      json.end_object();
+    }
+    json.end_array();
+    json.end_object();
+  }
   if (report.converged) {
     const auto fields = solver.cell_fields();
     json.key("max_displacement_m").value(solver.max_displacement());
@@ -144,32 +175,91 @@ int run_solve(const SolveOptions& o) {
     std::cerr << "error: " << o.scene << ": " << e.what() << "\n";
     return kExitBadInput;
   }
+  std::optional<fem::QuasiStaticSolver::Dynamics> dynamics;
+  try {
+    dynamics = fem::scene_dynamics(scene);
+  } catch (const std::exception& e) {
+    std::cerr << "error: " << o.scene << ": " << e.what() << "\n";
+    return kExitBadInput;
+  }
+  int rank = 0;
+  MPI_Comm_rank(MPI_COMM_WORLD, &rank);
+  const fs::path dir = o.out.empty() ? fs::path("fetouch-solve") / scene.name : fs::path(o.out);
   fem::NewtonSettings newton = model->newton;
   newton.load_steps = o.steps;
-  log::info() << "solving: " << model->solver->dofs() << " degrees of freedom, " << model->solver->cells() << " cells, "
-              << o.steps << " load steps";
   const auto start = std::chrono::steady_clock::now();
-  const fem::SolveReport report = model->solver->solve(newton);
+  fem::SolveReport report;
+  std::vector<TimeStep> series;
+  std::vector<std::pair<double, std::string>> frames;  // (time, VTU file name) for the PVD
+  if (!dynamics) {
+    log::info() << "solving: " << model->solver->dofs() << " degrees of freedom, " << model->solver->cells() << " cells, "
+                << o.steps << " load steps";
+    report = model->solver->solve(newton);
+  } else {
+    // A dynamic load case: the loads act from t = 0 (a step), time steps of 1 / solver.rate_hz.
+    model->solver->enable_dynamics(*dynamics);
+    newton.load_steps = 1;
+    const int count = std::max(1, static_cast<int>(std::lround(o.duration_s / dynamics->time_step_s)));
+    log::info() << "solving: " << model->solver->dofs() << " degrees of freedom, " << count << " time steps of "
+                << dynamics->time_step_s << " s";
+    try {
+      if (rank == 0) fs::create_directories(dir);
+    } catch (const std::exception& e) {
+      std::cerr << "error: " << e.what() << "\n";
+      return kExitFailure;
+    }
+    Progress progress("time steps", count, std::cerr, Progress::stderr_is_terminal());
+    for (int k = 1; k <= count; ++k) {
+      const fem::SolveReport step = model->solver->solve(newton);
+      report.total_iterations += step.total_iterations;
+      report.cuts += step.cuts;
+      report.steps = step.steps;
+      report.converged = step.converged;
+      report.failure = step.failure.empty() ? "" : "time step " + std::to_string(k) + ": " + step.failure;
+      if (!step.converged) break;
+      TimeStep t;
+      t.t = k * dynamics->time_step_s;
+      t.newton_iterations = step.total_iterations;
+      t.max_displacement_m = model->solver->max_displacement();
+      if (!patches.empty()) t.probe_displacement = model->solver->patch_displacement(patches.front());
+      series.push_back(t);
+      if (rank == 0) {
+        char name[64];
+        std::snprintf(name, sizeof name, "_%04d.vtu", k);
+        const std::string file = scene.name + name;
+        try {
+          model->solver->write_vtu((dir / file).string());
+        } catch (const std::exception& e) {
+          std::cerr << "error: " << e.what() << "\n";
+          return kExitFailure;
+        }
+        frames.emplace_back(t.t, file);
+      }
+      progress.update(k);
+    }
+    progress.finish();
+  }
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 
-  const fs::path dir = o.out.empty() ? fs::path("fetouch-solve") / scene.name : fs::path(o.out);
   const fs::path vtu = dir / (scene.name + ".vtu"), pvd = dir / (scene.name + ".pvd"), summary = dir / "summary.json";
   // The summary is computed once (it assembles to get the reactions) for the file and stdout.
   std::ostringstream json;
-  write_json(json, o, scene, *model, report, seconds, patches, vtu, pvd);
+  write_json(json, o, scene, *model, report, seconds, patches, vtu, pvd, series);
   json << "\n";
   // Under mpirun every rank solved (the same state on each); rank 0 writes and reports.
-  int rank = 0;
-  MPI_Comm_rank(MPI_COMM_WORLD, &rank);
   if (rank != 0) return report.converged ? kExitOk : kExitFailure;
   try {
     fs::create_directories(dir);
-    if (report.converged) {
+    if (report.converged && frames.empty()) {
       model->solver->write_vtu(vtu.string());
+      frames.emplace_back(1.0, vtu.filename().string());
+    }
+    if (!frames.empty()) {  // the time series of a dynamic case, or the one state
       std::ofstream p(pvd);
-      p << "<?xml version=\"1.0\"?>\n<VTKFile type=\"Collection\" version=\"0.1\">\n  <Collection>\n"
-        << "    <DataSet timestep=\"1\" group=\"\" part=\"0\" file=\"" << vtu.filename().string() << "\"/>\n"
-        << "  </Collection>\n</VTKFile>\n";
+      p << "<?xml version=\"1.0\"?>\n<VTKFile type=\"Collection\" version=\"0.1\">\n  <Collection>\n";
+      for (const auto& [t, file] : frames)
+        p << "    <DataSet timestep=\"" << t << "\" group=\"\" part=\"0\" file=\"" << file << "\"/>\n";
+      p << "  </Collection>\n</VTKFile>\n";
       if (!p) throw std::runtime_error("cannot write " + pvd.string());
     }
     std::ofstream s(summary);
@@ -221,6 +311,8 @@ void add_solve_command(CLI::App& parent, int& exit_code) {
   cmd->add_option("--point", o->points, "Report the displacement at X Y Z (m); repeatable")->expected(3)->take_all();
   cmd->add_option("--radius", o->radius_m, "Probe radius in m (default: the scene's first probe)")->check(CLI::PositiveNumber);
   cmd->add_option("--steps", o->steps, "Load steps")->check(CLI::Range(1, 1000))->capture_default_str();
+  cmd->add_option("--duration", o->duration_s, "Simulated time of a scene with inertia, s (loads as a step at t = 0)")
+      ->check(CLI::Range(1e-6, 1e4))->capture_default_str();
   cmd->add_flag("--json", o->json, "Print the JSON summary on stdout");
   cmd->callback([o, &exit_code]() { exit_code = run_solve(*o); });
 }

@@ -10,6 +10,9 @@
 #include <yaml-cpp/yaml.h>
 
 #include <cmath>
+#include <fstream>
+#include <iterator>
+#include <sstream>
 
 #include "tests/support/run_command.h"
 
@@ -59,6 +62,54 @@ TEST(SolveCommand, WaterBalloonKeepsItsVolumeAndPushesBack) {
   EXPECT_GT(p, 0.0);
   EXPECT_NEAR(v / v0 - 1, -p / 2.2e9, 1e-10);
   EXPECT_LT(j["points"][0]["displacement_m"][2].as<double>(), 0.0);
+  fs::remove_all(dir);
+}
+
+// A scene with inertia (tests/data/block_drop.yaml: the weight acts suddenly, Newmark, no damping)
+// is a dynamic load case: one VTU per time step listed in the PVD with its time, and a time series in
+// the summary that starts at rest, overshoots the static sag of the same scene without inertia and
+// swings back above it (an undamped step response rings about the static state).
+TEST(SolveCommand, InertiaMakesADynamicLoadCaseWithATimeSeries) {
+  const fs::path dir = scratch("drop");
+  const std::string scene = FETOUCH_TEST_DATA_DIR "/data/block_drop.yaml";
+  const auto r = run_command(fetouch("solve --json --duration 0.1 --out " + dir.string() + " " + scene));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const YAML::Node j = YAML::Load(r.out);
+  const YAML::Node steps = j["dynamic"]["time_steps"];
+  ASSERT_EQ(steps.size(), 40u);  // 0.1 s at 400 Hz
+  EXPECT_NEAR(j["dynamic"]["time_step_s"].as<double>(), 0.0025, 1e-12);
+  // The same block without inertia, for its static sag.
+  std::ifstream in(scene);
+  std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>()), line;
+  std::istringstream lines(text);
+  std::ofstream out(dir / "static.yaml");
+  while (std::getline(lines, line))
+    if (line.find("inertia") == std::string::npos) out << line << "\n";
+  out.close();
+  const auto st = run_command(fetouch("solve --json --out " + (dir / "static").string() + " " + (dir / "static.yaml").string()));
+  ASSERT_EQ(st.exit_code, 0) << st.err;
+  const double sag = YAML::Load(st.out)["max_displacement_m"].as<double>();
+  double peak = 0, trough_after_peak = 1e9;
+  int peak_at = 0;
+  for (std::size_t k = 0; k < steps.size(); ++k) {
+    const double u = steps[k]["max_displacement_m"].as<double>();
+    if (u > peak) peak = u, peak_at = static_cast<int>(k);
+  }
+  for (std::size_t k = peak_at; k < steps.size(); ++k) trough_after_peak = std::min(trough_after_peak, steps[k]["max_displacement_m"].as<double>());
+  std::printf("static sag %.3f mm; dynamic: first step %.3f mm, peak %.3f mm at %.4f s, then down to %.3f mm\n", 1e3 * sag,
+              1e3 * steps[0]["max_displacement_m"].as<double>(), 1e3 * peak, steps[peak_at]["t_s"].as<double>(),
+              1e3 * trough_after_peak);
+  EXPECT_LT(steps[0]["max_displacement_m"].as<double>(), 0.1 * sag);  // from rest
+  EXPECT_GT(peak, 1.3 * sag);
+  EXPECT_LT(trough_after_peak, 0.7 * sag);
+  // ParaView's time series: VTK reads every step's file.
+  std::ifstream pvd(dir / "block_drop.pvd");
+  const std::string collection((std::istreambuf_iterator<char>(pvd)), std::istreambuf_iterator<char>());
+  EXPECT_NE(collection.find("timestep=\"0.1\""), std::string::npos);
+  auto reader = vtkSmartPointer<vtkXMLUnstructuredGridReader>::New();
+  reader->SetFileName((dir / "block_drop_0040.vtu").string().c_str());
+  reader->Update();
+  EXPECT_GT(reader->GetOutput()->GetNumberOfCells(), 0);
   fs::remove_all(dir);
 }
 
