@@ -113,6 +113,7 @@ struct QuasiStaticSolver::Impl {
   MPI_Comm comm;
   int rank = 0, ranks = 1;
   std::vector<unsigned int> my_cells;  // indices (in cell order) of the cells this rank assembles
+  std::vector<unsigned int> cell_rank;  // the rank of every cell
   int owned_begin = 0, owned_end = 0;   // this rank's rows
   TangentSystem::Method linear_method = TangentSystem::Method::factorisation;
   TangentSystem tangent;
@@ -177,6 +178,7 @@ struct QuasiStaticSolver::Impl {
     } else {
       owned_begin = 0, owned_end = static_cast<int>(dof.n_dofs());
     }
+    cell_rank = part;
     my_cells.clear();
     for (unsigned int k = 0; k < cells; ++k)
       if (part[k] == unsigned(rank)) my_cells.push_back(k);
@@ -960,24 +962,50 @@ double QuasiStaticSolver::max_displacement() const {
   return worst;
 }
 
-void QuasiStaticSolver::write_vtu(const std::string& path) const {
-  const Impl& m = *impl_;
+// The deformed state as DataOut patches: displacement (dof data), J and von Mises stress (cell data),
+// optionally on the cells of one rank only.
+struct QuasiStaticSolver::Output {
   DataOut<3> out;
-  out.attach_dof_handler(m.dof);
+  Vector<double> jacobian, von_mises;
+};
+
+void QuasiStaticSolver::write_vtu(const std::string& path) const {
+  Output o;
+  fill_output(o, false);
+  std::ofstream file(path);
+  if (!file) throw std::runtime_error("cannot write " + path);
+  o.out.write_vtu(file);
+  if (!file) throw std::runtime_error("cannot write " + path);
+}
+
+std::string QuasiStaticSolver::write_vtu_pieces(const std::string& directory, const std::string& name,
+                                                unsigned int counter) const {
+  Output o;
+  fill_output(o, true);
+  try {
+    return o.out.write_vtu_with_pvtu_record(directory + "/", name, counter, impl_->comm, 4);
+  } catch (const std::exception&) {
+    throw std::runtime_error("cannot write " + directory + "/" + name + " (parallel VTU pieces)");
+  }
+}
+
+void QuasiStaticSolver::fill_output(Output& o, bool own_cells_only) const {
+  const Impl& m = *impl_;
+  o.out.attach_dof_handler(m.dof);
   const std::vector<std::string> names(3, "displacement");
   const std::vector<DataComponentInterpretation::DataComponentInterpretation> kinds(
       3, DataComponentInterpretation::component_is_part_of_vector);
-  out.add_data_vector(m.u, names, DataOut<3>::type_dof_data, kinds);
+  o.out.add_data_vector(m.u, names, DataOut<3>::type_dof_data, kinds);
   const CellFields fields = cell_fields();
-  Vector<double> jacobian(fields.jacobian.begin(), fields.jacobian.end());
-  Vector<double> von_mises(fields.von_mises.begin(), fields.von_mises.end());
-  out.add_data_vector(jacobian, "J", DataOut<3>::type_cell_data);
-  out.add_data_vector(von_mises, "von_mises_stress_pa", DataOut<3>::type_cell_data);
-  out.build_patches(*m.mapping, m.fe->degree);
-  std::ofstream file(path);
-  if (!file) throw std::runtime_error("cannot write " + path);
-  out.write_vtu(file);
-  if (!file) throw std::runtime_error("cannot write " + path);
+  o.jacobian = Vector<double>(fields.jacobian.begin(), fields.jacobian.end());
+  o.von_mises = Vector<double>(fields.von_mises.begin(), fields.von_mises.end());
+  o.out.add_data_vector(o.jacobian, "J", DataOut<3>::type_cell_data);
+  o.out.add_data_vector(o.von_mises, "von_mises_stress_pa", DataOut<3>::type_cell_data);
+  if (own_cells_only)
+    o.out.set_cell_selection([&m](const typename Triangulation<3>::cell_iterator& cell) {
+      return cell->is_active() && m.cell_rank[cell->active_cell_index()] == static_cast<unsigned int>(m.rank);
+    });
+  o.out.build_patches(*m.mapping, m.fe->degree);
 }
 
 int QuasiStaticSolver::add_contact_patch(const Point<3>& center, double radius) {

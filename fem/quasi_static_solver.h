@@ -189,8 +189,13 @@ class QuasiStaticSolver {
   // The deformed state for ParaView: a VTU with the displacement (warp by vector to see the
   // deformation), J and the von Mises stress per cell. Throws std::runtime_error if unwritable.
   void write_vtu(const std::string& path) const;
+  // In parallel: every rank writes the cells it assembles as DIRECTORY/NAME_CCCC.RRRR.vtu, rank 0 the
+  // DIRECTORY/NAME_CCCC.pvtu that gathers them (collective; returns the .pvtu's file name).
+  std::string write_vtu_pieces(const std::string& directory, const std::string& name, unsigned int counter) const;
 
  private:
+  struct Output;  // deal.II's DataOut and the cell fields it refers to
+  void fill_output(Output& output, bool own_cells_only) const;
   struct Impl;
   std::unique_ptr<Impl> impl_;
 };

@@ -184,7 +184,26 @@ int run_solve(const SolveOptions& o) {
   }
   int rank = 0;
   MPI_Comm_rank(MPI_COMM_WORLD, &rank);
+  const bool parallel = model->solver->ranks() > 1;
   const fs::path dir = o.out.empty() ? fs::path("fetouch-solve") / scene.name : fs::path(o.out);
+  int made = 1;
+  if (rank == 0) {
+    std::error_code error;
+    fs::create_directories(dir, error);
+    made = error ? 0 : 1;
+  }
+  MPI_Bcast(&made, 1, MPI_INT, 0, MPI_COMM_WORLD);
+  if (!made) {
+    if (rank == 0) std::cerr << "error: cannot create the output folder " << dir.string() << "\n";
+    return kExitFailure;
+  }
+  // The deformed state: one VTU (serial), or on N ranks each rank's cells and a PVTU gathering them.
+  // Collective under MPI; rank 0 gets the file to list in the PVD.
+  const auto write_state = [&](unsigned int counter, const std::string& serial_name) -> std::string {
+    if (parallel) return fs::path(model->solver->write_vtu_pieces(dir.string(), scene.name, counter)).filename().string();
+    if (rank == 0) model->solver->write_vtu((dir / serial_name).string());
+    return serial_name;
+  };
   fem::NewtonSettings newton = model->newton;
   newton.load_steps = o.steps;
   const auto start = std::chrono::steady_clock::now();
@@ -202,12 +221,6 @@ int run_solve(const SolveOptions& o) {
     const int count = std::max(1, static_cast<int>(std::lround(o.duration_s / dynamics->time_step_s)));
     log::info() << "solving: " << model->solver->dofs() << " degrees of freedom, " << count << " time steps of "
                 << dynamics->time_step_s << " s";
-    try {
-      if (rank == 0) fs::create_directories(dir);
-    } catch (const std::exception& e) {
-      std::cerr << "error: " << e.what() << "\n";
-      return kExitFailure;
-    }
     Progress progress("time steps", count, std::cerr, Progress::stderr_is_terminal());
     for (int k = 1; k <= count; ++k) {
       const fem::SolveReport step = model->solver->solve(newton);
@@ -223,17 +236,14 @@ int run_solve(const SolveOptions& o) {
       t.max_displacement_m = model->solver->max_displacement();
       if (!patches.empty()) t.probe_displacement = model->solver->patch_displacement(patches.front());
       series.push_back(t);
-      if (rank == 0) {
-        char name[64];
-        std::snprintf(name, sizeof name, "_%04d.vtu", k);
-        const std::string file = scene.name + name;
-        try {
-          model->solver->write_vtu((dir / file).string());
-        } catch (const std::exception& e) {
-          std::cerr << "error: " << e.what() << "\n";
-          return kExitFailure;
-        }
-        frames.emplace_back(t.t, file);
+      char name[64];
+      std::snprintf(name, sizeof name, "_%04d.vtu", k);
+      try {
+        const std::string file = write_state(static_cast<unsigned int>(k), scene.name + name);
+        if (rank == 0) frames.emplace_back(t.t, file);
+      } catch (const std::exception& e) {
+        std::cerr << "error: " << e.what() << "\n";
+        return kExitFailure;
       }
       progress.update(k);
     }
@@ -241,19 +251,24 @@ int run_solve(const SolveOptions& o) {
   }
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 
-  const fs::path vtu = dir / (scene.name + ".vtu"), pvd = dir / (scene.name + ".pvd"), summary = dir / "summary.json";
+  // In parallel the state is the PVTU that gathers the ranks' pieces (deal.II's naming).
+  const fs::path vtu = dir / (scene.name + (parallel ? "_0000.pvtu" : ".vtu")), pvd = dir / (scene.name + ".pvd"), summary = dir / "summary.json";
   // The summary is computed once (it assembles to get the reactions) for the file and stdout.
   std::ostringstream json;
   write_json(json, o, scene, *model, report, seconds, patches, vtu, pvd, series);
   json << "\n";
-  // Under mpirun every rank solved (the same state on each); rank 0 writes and reports.
+  if (report.converged && frames.empty() && series.empty()) {  // a quasi-static case: its one state
+    try {
+      const std::string file = write_state(0, vtu.filename().string());
+      if (rank == 0) frames.emplace_back(1.0, file);
+    } catch (const std::exception& e) {
+      std::cerr << "error: " << e.what() << "\n";
+      return kExitFailure;
+    }
+  }
+  // Under mpirun every rank solved (the same state on each); rank 0 reports.
   if (rank != 0) return report.converged ? kExitOk : kExitFailure;
   try {
-    fs::create_directories(dir);
-    if (report.converged && frames.empty()) {
-      model->solver->write_vtu(vtu.string());
-      frames.emplace_back(1.0, vtu.filename().string());
-    }
     if (!frames.empty()) {  // the time series of a dynamic case, or the one state
       std::ofstream p(pvd);
       p << "<?xml version=\"1.0\"?>\n<VTKFile type=\"Collection\" version=\"0.1\">\n  <Collection>\n";

@@ -1,11 +1,17 @@
 // `mpirun -np 2 fetouch solve` against the serial `fetouch solve` on the shipped block scene (P1)
 // and a P2 test scene: the same displacements, reactions and probe displacements to the Newton
-// tolerance, the same Newton iterations, and the summary saying 2 ranks. Label mpi.
+// tolerance, the same Newton iterations, the summary saying 2 ranks, and the deformed mesh as a PVTU
+// whose per-rank pieces VTK reads and whose cells add up to the serial VTU's. Label mpi.
 #include <gtest/gtest.h>
+#include <vtkSmartPointer.h>
+#include <vtkUnstructuredGrid.h>
+#include <vtkXMLUnstructuredGridReader.h>
 #include <yaml-cpp/yaml.h>
 
 #include <cmath>
 #include <filesystem>
+#include <fstream>
+#include <iterator>
 
 #include "tests/support/run_command.h"
 
@@ -18,9 +24,32 @@ YAML::Node solve(const std::string& launcher, const std::string& arguments) {
   return YAML::Load(r.out);
 }
 
-void expect_same_solve(const std::string& arguments) {
-  const YAML::Node serial = solve("", arguments);
+// The parallel output: a PVTU naming one VTU piece per rank, whose cells add up to the serial mesh's.
+void expect_pieces(const std::filesystem::path& dir, const std::string& name, long serial_cells) {
+  std::ifstream pvtu(dir / (name + "_0000.pvtu"));
+  ASSERT_TRUE(pvtu) << "no " << name << "_0000.pvtu in " << dir.string();
+  const std::string text((std::istreambuf_iterator<char>(pvtu)), std::istreambuf_iterator<char>());
+  long cells = 0;
+  for (int rank = 0; rank < 2; ++rank) {
+    const std::string piece = name + "_0000." + std::to_string(rank) + ".vtu";
+    EXPECT_NE(text.find(piece), std::string::npos) << piece;
+    auto reader = vtkSmartPointer<vtkXMLUnstructuredGridReader>::New();
+    reader->SetFileName((dir / piece).string().c_str());
+    reader->Update();
+    cells += reader->GetOutput()->GetNumberOfCells();
+  }
+  EXPECT_EQ(cells, serial_cells);
+}
+
+void expect_same_solve(const std::string& serial_arguments, const std::string& arguments) {
+  const YAML::Node serial = solve("", serial_arguments);
   const YAML::Node parallel = solve(FETOUCH_MPIEXEC " --allow-run-as-root --oversubscribe -np 2 ", arguments);
+  const std::filesystem::path pvtu = parallel["vtu"].as<std::string>();
+  const std::string stem = pvtu.filename().string().substr(0, pvtu.filename().string().size() - std::string("_0000.pvtu").size());
+  auto serial_grid = vtkSmartPointer<vtkXMLUnstructuredGridReader>::New();
+  serial_grid->SetFileName(serial["vtu"].as<std::string>().c_str());
+  serial_grid->Update();
+  expect_pieces(pvtu.parent_path(), stem, serial_grid->GetOutput()->GetNumberOfCells());
   ASSERT_TRUE(serial["converged"].as<bool>());
   ASSERT_TRUE(parallel["converged"].as<bool>());
   EXPECT_EQ(serial["ranks"].as<int>(), 1);
@@ -40,9 +69,10 @@ void expect_same_solve(const std::string& arguments) {
 
 TEST(SolveMpi, TwoRanksReproduceTheSerialBlockPress) {
   const std::filesystem::path dir = std::filesystem::temp_directory_path() / ("fetouch_mpi_solve_" + std::to_string(::getpid()));
-  expect_same_solve("--press 0.05 0.04 0.05 0 0 -0.3 --point 0.05 0.04 0.03 --out " + dir.string() + " " FETOUCH_SOURCE_DIR
-                    "/config/scenes/block_press.yaml");
-  expect_same_solve("--point 0.05 0.04 0.02 --out " + dir.string() + " " FETOUCH_TEST_DATA_DIR "/data/block_gravity.yaml");
+  const std::string press = FETOUCH_SOURCE_DIR "/config/scenes/block_press.yaml --press 0.05 0.04 0.05 0 0 -0.3 --point 0.05 0.04 0.03";
+  expect_same_solve(press + " --out " + (dir / "serial").string(), press + " --out " + (dir / "parallel").string());
+  const std::string gravity = FETOUCH_TEST_DATA_DIR "/data/block_gravity.yaml --point 0.05 0.04 0.02";
+  expect_same_solve(gravity + " --out " + (dir / "serial_g").string(), gravity + " --out " + (dir / "parallel_g").string());
   std::filesystem::remove_all(dir);
 }
 
