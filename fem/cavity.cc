@@ -19,13 +19,6 @@ double CavityLaw::volume_derivative(double pressure, double reference_volume) co
 
 namespace {
 
-std::array<std::array<double, 3>, 3> deformed(const CavityWall::Triangle& t, const double* u) {
-  std::array<std::array<double, 3>, 3> x;
-  for (int v = 0; v < 3; ++v)
-    for (int d = 0; d < 3; ++d) x[v][d] = t.position[v][d] + u[t.dofs[v][d]];
-  return x;
-}
-
 std::array<double, 3> cross(const std::array<double, 3>& a, const std::array<double, 3>& b) {
   return {a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]};
 }
@@ -35,7 +28,7 @@ std::array<double, 3> cross(const std::array<double, 3>& a, const std::array<dou
 double CavityWall::volume(const double* u) const {
   double v = 0;
   for (const Triangle& t : triangles) {
-    const auto x = deformed(t, u);
+    const auto x = t.deformed(u);
     const auto bc = cross(x[1], x[2]);
     v += x[0][0] * bc[0] + x[0][1] * bc[1] + x[0][2] * bc[2];
   }
@@ -45,7 +38,7 @@ double CavityWall::volume(const double* u) const {
 void CavityWall::add_gradient(const double* u, double scale, double* g) const {
   // dV/da = (b x c)/6, dV/db = (c x a)/6, dV/dc = (a x b)/6.
   for (const Triangle& t : triangles) {
-    const auto x = deformed(t, u);
+    const auto x = t.deformed(u);
     for (int v = 0; v < 3; ++v) {
       const auto d = cross(x[(v + 1) % 3], x[(v + 2) % 3]);
       for (int c = 0; c < 3; ++c) g[t.dofs[v][c]] += scale * d[c] / 6;

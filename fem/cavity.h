@@ -35,6 +35,13 @@ struct CavityWall {
   struct Triangle {
     std::array<std::array<unsigned int, 3>, 3> dofs;  // [vertex][component] global dof index
     std::array<std::array<double, 3>, 3> position;    // [vertex] reference position, m
+    // The vertices at displacement u: position + u.
+    std::array<std::array<double, 3>, 3> deformed(const double* u) const {
+      std::array<std::array<double, 3>, 3> x;
+      for (int v = 0; v < 3; ++v)
+        for (int d = 0; d < 3; ++d) x[v][d] = position[v][d] + u[dofs[v][d]];
+      return x;
+    }
   };
   std::vector<Triangle> triangles;
 
@@ -51,9 +58,7 @@ template <class Add>
 void CavityWall::add_hessian(const double* u, double scale, Add add) const {
   // d2V/da_i db_j = 1/6 e_ijk c_k, and cyclically: (a, b, c) -> (b, c, a) -> (c, a, b).
   for (const Triangle& t : triangles) {
-    std::array<std::array<double, 3>, 3> x;
-    for (int v = 0; v < 3; ++v)
-      for (int d = 0; d < 3; ++d) x[v][d] = t.position[v][d] + u[t.dofs[v][d]];
+    const auto x = t.deformed(u);
     for (int v = 0; v < 3; ++v) {
       const int w = (v + 1) % 3, o = (v + 2) % 3;  // block (v, w) uses the third vertex o
       const std::array<double, 3>& c = x[o];

@@ -16,19 +16,13 @@
 #include <deal.II/grid/grid_tools.h>
 #include <deal.II/lac/sparsity_pattern.h>
 #include <deal.II/lac/sparsity_tools.h>
-#include <deal.II/dofs/dof_renumbering.h>
 #include <deal.II/lac/affine_constraints.h>
 #include <deal.II/lac/dynamic_sparsity_pattern.h>
 #include <deal.II/lac/full_matrix.h>
-#include <deal.II/lac/petsc_solver.h>
-#include <deal.II/lac/petsc_sparse_matrix.h>
-#include <deal.II/lac/petsc_vector.h>
-#include <deal.II/lac/solver_control.h>
 #include <deal.II/lac/vector.h>
 #include <deal.II/numerics/data_component_interpretation.h>
 #include <deal.II/numerics/data_out.h>
 #include <deal.II/numerics/vector_tools.h>
-
 
 #include <chrono>
 #include <cmath>
@@ -43,7 +37,6 @@
 namespace fetouch::fem {
 
 using namespace dealii;
-
 
 struct QuasiStaticSolver::Impl {
   const Triangulation<3>& tria;
@@ -99,7 +92,7 @@ struct QuasiStaticSolver::Impl {
   double static_done = 0;
   double static_factor(double lambda) const { return static_done + lambda * (1 - static_done); }
   std::vector<Patch> patches;
-  int linear_iterations = 0, factorisations_before = 0;
+  int linear_iterations = 0;
   std::vector<Vector<double>> compliance_columns;  // K^-1 H' of the last compliance: warm starts
   // Phase timers of the running solve, and of the last compliance.
   double assembly_s = 0, factorisation_s = 0, solve_s = 0;
@@ -199,17 +192,23 @@ struct QuasiStaticSolver::Impl {
     return flag == 1;
   }
 
-  // The rigid-body modes (3 translations, 3 rotations about the centroid), zero on constrained dofs:
-  // algebraic multigrid's near-null space.
-  std::vector<std::vector<double>> rigid_body_modes() const {
-    std::map<types::global_dof_index, Point<3>> points;
-    DoFTools::map_dofs_to_support_points(*mapping, dof, points);
+  // The displacement component of every dof (whatever the numbering).
+  std::vector<int> dof_components() const {
     std::vector<int> component(dof.n_dofs(), 0);
     std::vector<types::global_dof_index> indices(fe->n_dofs_per_cell());
     for (const auto& cell : dof.active_cell_iterators()) {
       cell->get_dof_indices(indices);
       for (unsigned int i = 0; i < indices.size(); ++i) component[indices[i]] = fe->system_to_component_index(i).first;
     }
+    return component;
+  }
+
+  // The rigid-body modes (3 translations, 3 rotations about the centroid), zero on constrained dofs:
+  // algebraic multigrid's near-null space.
+  std::vector<std::vector<double>> rigid_body_modes() const {
+    std::map<types::global_dof_index, Point<3>> points;
+    DoFTools::map_dofs_to_support_points(*mapping, dof, points);
+    const std::vector<int> component = dof_components();
     Point<3> centre;
     for (const auto& [i, x] : points) centre += x / static_cast<double>(points.size());
     std::vector<std::vector<double>> modes(6, std::vector<double>(dof.n_dofs(), 0.0));
@@ -556,6 +555,7 @@ struct QuasiStaticSolver::Impl {
     std::vector<double> u_local(n);
     std::vector<std::array<Tensor<1, 3>, 3>> a_grad(n);
     std::vector<double> volume_gradient(mean_dilatation ? n : 0);
+    std::vector<Tensor2> F_at(nq);  // per quadrature point of the cell
     Tensor2 P;
     Tensor4 A;
     for (unsigned int kk = begin; kk < end; ++kk) {
@@ -563,6 +563,7 @@ struct QuasiStaticSolver::Impl {
       const types::global_dof_index* indices = &c.indices[std::size_t(k) * n];
       const Material& material = *cell_material[k];
       gather(k, u, u_local);
+      for (unsigned int q = 0; q < nq; ++q) F_at[q] = deformation_gradient(k, q, u_local);
       cell_matrix = 0;
       cell_internal = 0;
       // Mean dilatation: U(J) becomes U(theta) of the cell's volume ratio theta = v / V, its
@@ -573,7 +574,7 @@ struct QuasiStaticSolver::Impl {
         double volume = 0;
         for (unsigned int q = 0; q < nq; ++q) {
           const double jxw = c.jxw[std::size_t(k) * nq + q];
-          const double j = determinant(deformation_gradient(k, q, u_local));
+          const double j = determinant(F_at[q]);
           if (!(j > 0)) return false;
           volume += j * jxw;
           reference_volume += jxw;
@@ -584,7 +585,7 @@ struct QuasiStaticSolver::Impl {
       for (unsigned int q = 0; q < nq; ++q) {
         const Tensor<1, 3>* grad = &c.gradients[(std::size_t(k) * nq + q) * c.nbase];
         const double jxw = c.jxw[std::size_t(k) * nq + q];
-        const Tensor2 F = deformation_gradient(k, q, u_local);
+        const Tensor2& F = F_at[q];
         if (!material.evaluate(F, P, tangent ? &A : nullptr)) return false;
         if (mean_dilatation) {
           // Swap the point's volumetric stress U'(J) J F^-T for the cell's p J F^-T, and in the
@@ -669,13 +670,15 @@ struct QuasiStaticSolver::Impl {
     if (!cache.built) build_cache();
     const Cache& c = cache;
     if (tangent && scatter.size() != std::size_t(tria.n_active_cells()) * c.n * c.n) build_scatter();
-    // With inertia: a+ + alpha v+ at every dof, once per assembly (not once per cell sharing it).
-    Vector<double> inertial;
+    // With inertia: v+ and a+ + alpha v+ at every dof, once per assembly (not once per cell sharing it).
+    Vector<double> inertial, velocities;
     if (dynamic) {
       inertial.reinit(u.size());
+      velocities.reinit(u.size());
       for (types::global_dof_index i = 0; i < u.size(); ++i) {
         const double a_new = acceleration(u[i], i);
-        inertial[i] = a_new + dynamics.rayleigh_mass_per_s * velocity(u[i], a_new, i);
+        velocities[i] = velocity(u[i], a_new, i);
+        inertial[i] = a_new + dynamics.rayleigh_mass_per_s * velocities[i];
       }
     }
     r = 0;
@@ -716,16 +719,15 @@ struct QuasiStaticSolver::Impl {
     if (tangent) sum_over_ranks(values, this->tangent.nonzeros());
     if (dynamic && dynamics.rayleigh_stiffness_s != 0 && !reference_stiffness.empty()) {
       // beta K0 v+ into the residual, beta K0 dv+/du+ into the tangent.
-      Vector<double> velocity_now(u.size()), damping(u.size());
-      for (types::global_dof_index i = 0; i < u.size(); ++i) velocity_now[i] = velocity(u[i], acceleration(u[i], i), i);
-      this->tangent.multiply(reference_stiffness.data(), velocity_now.begin(), damping.begin());
-      const double beta = dynamics.rayleigh_stiffness_s;
+      Vector<double> damping(u.size());
+      this->tangent.multiply(reference_stiffness.data(), velocities.begin(), damping.begin());
+      const double beta = dynamics.rayleigh_stiffness_s, gain = beta * velocity_gain();
       for (types::global_dof_index i = 0; i < u.size(); ++i) {
         if (internal) (*internal)[i] += beta * damping[i];
         if (!constrained[i]) r[i] -= beta * damping[i];
       }
       if (tangent)
-        for (std::size_t k = 0; k < reference_stiffness.size(); ++k) values[k] += beta * velocity_gain() * reference_stiffness[k];
+        for (std::size_t k = 0; k < reference_stiffness.size(); ++k) values[k] += gain * reference_stiffness[k];
     }
     if (cavity.active && !assemble_cavity(r, tangent, internal)) return false;
     if (tangent) {
@@ -786,20 +788,21 @@ struct QuasiStaticSolver::Impl {
     for (Vector<double>& row : p.h) row /= total;
   }
 
-  // x = K^-1 rhs to a relative residual `tolerance`, x holding the initial guess unless zero_guess.
-  void solve_tangent(const Vector<double>& rhs, Vector<double>& x, double tolerance, bool zero_guess) {
-    x.reinit(rhs.size(), /*omit_zeroing_entries=*/!zero_guess);
-    TangentSystem::SolveStats stats = tangent.solve(rhs.begin(), x.begin(), tolerance, zero_guess);
+  // Adds a linear solve's figures to the running solve's.
+  void account(const TangentSystem::SolveStats& stats) {
     factorisation_s += stats.factor_s;
     solve_s += stats.solve_s;
     linear_iterations += stats.iterations;
+  }
+
+  // x = K^-1 rhs to a relative residual `tolerance`, x holding the initial guess unless zero_guess.
+  void solve_tangent(const Vector<double>& rhs, Vector<double>& x, double tolerance, bool zero_guess) {
+    x.reinit(rhs.size(), /*omit_zeroing_entries=*/!zero_guess);
+    account(tangent.solve(rhs.begin(), x.begin(), tolerance, zero_guess));
     if (cavity.active && cavity.stiffness != 0) {
       // Sherman-Morrison: (K_s + c g g')^-1 b = x - c (g.x) / (1 + c g.y) y, x = K_s^-1 b, y = K_s^-1 g.
       if (!cavity.y_current) {
-        stats = tangent.solve(cavity.g.begin(), cavity.y.begin(), std::min(tolerance, 1e-10), /*zero_guess=*/false);
-        factorisation_s += stats.factor_s;
-        solve_s += stats.solve_s;
-        linear_iterations += stats.iterations;
+        account(tangent.solve(cavity.g.begin(), cavity.y.begin(), std::min(tolerance, 1e-10), /*zero_guess=*/false));
         cavity.y_current = true;
       }
       const double c = cavity.stiffness;
@@ -1110,10 +1113,9 @@ FullMatrix<double> QuasiStaticSolver::compliance() {
       break;
     }
     std::vector<double> corrections(residuals.size());
-    const TangentSystem::SolveStats stats = m.tangent.apply_factorisation(residuals.data(), corrections.data(), columns);
-    m.factorisation_s += stats.factor_s;
-    m.solve_s += stats.solve_s;
-    m.linear_iterations += 1;
+    TangentSystem::SolveStats stats = m.tangent.apply_factorisation(residuals.data(), corrections.data(), columns);
+    stats.iterations = 1;  // one blocked application
+    m.account(stats);
     basis = z;
     for (unsigned int k = 0; k < columns; ++k) {
       Vector<double> d(n);
@@ -1168,25 +1170,29 @@ double QuasiStaticSolver::cavity_pressure() const {
   return m.cavity.active ? m.cavity.pressure : 0.0;
 }
 
+namespace {
+
+void require_decoupled(const Material& material) {
+  double u1 = 0, u2 = 0;
+  if (!material.volumetric(1.0, u1, u2))
+    throw std::invalid_argument("the mean-dilatation formulation needs a decoupled material (neo_hookean_incompressible "
+                                "or mooney_rivlin), not " + material.name());
+}
+
+}  // namespace
+
 void QuasiStaticSolver::set_region_material(unsigned int material_id, const Material& material) {
   Impl& m = *impl_;
-  if (m.mean_dilatation) {
-    double u1 = 0, u2 = 0;
-    if (!material.volumetric(1.0, u1, u2))
-      throw std::invalid_argument("the mean-dilatation formulation needs a decoupled material, not " + material.name());
-  }
+  if (m.mean_dilatation) require_decoupled(material);
   m.region_materials[static_cast<types::material_id>(material_id)] = &material;
   m.cache.built = false;
 }
 
 void QuasiStaticSolver::use_mean_dilatation(bool on) {
-  double u1 = 0, u2 = 0;
-  std::vector<const Material*> all{&impl_->material};
-  for (const auto& [id, material] : impl_->region_materials) all.push_back(material);
-  for (const Material* material : all)
-    if (on && !material->volumetric(1.0, u1, u2))
-      throw std::invalid_argument("the mean-dilatation formulation needs a decoupled material (neo_hookean_incompressible "
-                                  "or mooney_rivlin), not " + material->name());
+  if (on) {
+    require_decoupled(impl_->material);
+    for (const auto& [id, material] : impl_->region_materials) require_decoupled(*material);
+  }
   impl_->mean_dilatation = on;
 }
 
@@ -1222,23 +1228,23 @@ double QuasiStaticSolver::l2_error(const std::function<Tensor<1, 3>(const Point<
 }
 
 SolveReport QuasiStaticSolver::solve(const NewtonSettings& s) {
-  impl_->setup_constraints();
-  if (impl_->dynamic && impl_->dynamics.rayleigh_stiffness_s != 0 && impl_->reference_stiffness.empty())
-    impl_->build_reference_stiffness();
-  const Vector<double> initial = impl_->u;
-  const double initial_pressure = impl_->cavity.pressure;
-  if (impl_->dynamic) impl_->u_old = initial;
-  impl_->assembly_s = impl_->factorisation_s = impl_->solve_s = 0;
-  impl_->linear_iterations = 0;
-  const int factorisations = impl_->tangent.factorisations();
+  Impl& m = *impl_;
+  m.setup_constraints();
+  if (m.dynamic && m.dynamics.rayleigh_stiffness_s != 0 && m.reference_stiffness.empty())
+    m.build_reference_stiffness();
+  const Vector<double> initial = m.u;
+  const double initial_pressure = m.cavity.pressure;
+  if (m.dynamic) m.u_old = initial;
+  m.assembly_s = m.factorisation_s = m.solve_s = 0;
+  m.linear_iterations = 0;
+  const int factorisations = m.tangent.factorisations();
   SolveReport report;
   const auto times = [&] {
-    report.assembly_s = impl_->assembly_s, report.factorisation_s = impl_->factorisation_s, report.solve_s = impl_->solve_s;
-    report.linear_iterations = impl_->linear_iterations;
-    report.factorisations = impl_->tangent.factorisations() - factorisations;
+    report.assembly_s = m.assembly_s, report.factorisation_s = m.factorisation_s, report.solve_s = m.solve_s;
+    report.linear_iterations = m.linear_iterations;
+    report.factorisations = m.tangent.factorisations() - factorisations;
   };
   double done = 0, increment = 1.0 / std::max(1, s.load_steps);
-  Impl& m = *impl_;
   // A frame that changes only the patch forces starts from the linear prediction u + Z dF, Z = K^-1 H'
   // the last compliance's columns (at this state): a Newton step without assembly or solve. The
   // tolerance stays relative to the residual the force change makes at the old state, |H' dF|.
@@ -1246,7 +1252,7 @@ SolveReport QuasiStaticSolver::solve(const NewtonSettings& s) {
                  m.compliance_columns.size() == 3 * m.patches.size();
   while (done < 1 - 1e-12) {
     const double target = std::min(1.0, done + increment);
-    const Vector<double> last_good = impl_->u;
+    const Vector<double> last_good = m.u;
     const double last_good_pressure = m.cavity.pressure;
     double reference = -1;
     if (predict) {
@@ -1260,7 +1266,7 @@ SolveReport QuasiStaticSolver::solve(const NewtonSettings& s) {
       m.constraints.set_zero(load);
       reference = load.l2_norm();
     }
-    StepReport step = impl_->newton(target, s, reference);
+    StepReport step = m.newton(target, s, reference);
     report.total_iterations += static_cast<int>(step.residuals.size()) - 1;
     const bool ok = step.converged;
     report.steps.push_back(step);
@@ -1269,20 +1275,20 @@ SolveReport QuasiStaticSolver::solve(const NewtonSettings& s) {
       predict = false;
       continue;
     }
-    impl_->u = last_good;  // roll back the step
+    m.u = last_good;  // roll back the step
     m.cavity.pressure = last_good_pressure;
     if (predict) {  // retry the same step from the last converged state
       predict = false;
-      impl_->tangent_current = false;
+      m.tangent_current = false;
       continue;
     }
     predict = false;
-    impl_->tangent_current = false;
-    impl_->tangent.refactor_next();  // the retry starts from a state the factorisation may not fit
+    m.tangent_current = false;
+    m.tangent.refactor_next();  // the retry starts from a state the factorisation may not fit
     if (++report.cuts > s.max_cuts) {
-      impl_->u = initial;  // and the whole solve: the state stays the last converged one
+      m.u = initial;  // and the whole solve: the state stays the last converged one
       m.cavity.pressure = initial_pressure;
-      impl_->tangent_current = false;
+      m.tangent_current = false;
       report.failure = "load step at factor " + std::to_string(target) + " failed after " + std::to_string(s.max_cuts) +
                        " cuts: " + step.failure;
       times();
@@ -1292,8 +1298,8 @@ SolveReport QuasiStaticSolver::solve(const NewtonSettings& s) {
   }
   report.converged = true;
   times();
-  impl_->static_done = 1;
-  if (impl_->dynamic) {  // advance the time-stepping state
+  m.static_done = 1;
+  if (m.dynamic) {  // advance the time-stepping state
     for (types::global_dof_index i = 0; i < m.u.size(); ++i) {
       const double a_new = m.acceleration(m.u[i], i);
       const double v_new = m.velocity(m.u[i], a_new, i);
@@ -1301,7 +1307,7 @@ SolveReport QuasiStaticSolver::solve(const NewtonSettings& s) {
       m.v_old[i] = v_new;
     }
   }
-  for (auto& p : impl_->patches) p.converged_force = p.force;
+  for (auto& p : m.patches) p.converged_force = p.force;
   return report;
 }
 
@@ -1330,13 +1336,7 @@ double QuasiStaticSolver::max_nodal_error(const std::function<Tensor<1, 3>(const
   std::map<types::global_dof_index, Point<3>> points;
   DoFTools::map_dofs_to_support_points(*impl_->mapping, impl_->dof, points);
   double worst = 0;
-  // The component of each dof, from the cells (whatever the numbering).
-  std::vector<int> component(impl_->dof.n_dofs(), -1);
-  std::vector<types::global_dof_index> indices(impl_->fe->n_dofs_per_cell());
-  for (const auto& cell : impl_->dof.active_cell_iterators()) {
-    cell->get_dof_indices(indices);
-    for (unsigned int i = 0; i < indices.size(); ++i) component[indices[i]] = impl_->fe->system_to_component_index(i).first;
-  }
+  const std::vector<int> component = impl_->dof_components();
   for (const auto& [index, point] : points) worst = std::max(worst, std::abs(impl_->u[index] - exact(point)[component[index]]));
   return worst;
 }

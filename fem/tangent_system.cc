@@ -268,20 +268,14 @@ TangentSystem::SolveStats TangentSystem::solve(const double* b, double* x, doubl
     return reason > 0;
   };
   const int limit = amg ? 1000 : max_cg_iterations;
-  if (!p.factored || refactor_) {
+  // No factorisation yet, one due, or CG on the old one failed (it drifted too far from K, or K lost
+  // definiteness): set up again, then solve directly (or by CG on the fresh multigrid).
+  if (!p.factored || refactor_ || !cg(limit)) {
     factor(stats);
-    if (amg) {
-      if (!cg(limit)) throw std::runtime_error("CG with algebraic multigrid did not converge (a singular tangent?)");
-    } else {
+    if (!amg) {
       direct();
-    }
-  } else if (!cg(limit)) {
-    // The preconditioner has drifted too far from K (or K lost definiteness): set it up again.
-    factor(stats);
-    if (amg) {
-      if (!cg(limit)) throw std::runtime_error("CG with algebraic multigrid did not converge (a singular tangent?)");
-    } else {
-      direct();
+    } else if (!cg(limit)) {
+      throw std::runtime_error("CG with algebraic multigrid did not converge (a singular tangent?)");
     }
   }
   gather(x);

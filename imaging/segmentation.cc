@@ -105,6 +105,13 @@ Mask threshold(const Volume<float>& v, float low, float high) {
   return m;
 }
 
+Mask select_labels(const Volume<float>& labels_map, const std::vector<int>& labels) {
+  Mask m = like<std::uint8_t>(labels_map);
+  for (std::size_t a = 0; a < labels_map.data.size(); ++a)
+    m.data[a] = std::find(labels.begin(), labels.end(), static_cast<int>(labels_map.data[a])) != labels.end();
+  return m;
+}
+
 Mask connected_component(const Mask& mask, ComponentChoice choice, std::array<int, 3> seed) {
   std::vector<std::size_t> sizes;
   std::vector<bool> touches;

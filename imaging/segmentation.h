@@ -12,6 +12,7 @@
 
 #include <array>
 #include <cstdint>
+#include <vector>
 
 #include "imaging/phantom.h"
 
@@ -23,6 +24,8 @@ Volume<float> gaussian_smooth(const Volume<float>& v, double sigma_mm);
 Volume<float> median3(const Volume<float>& v);
 Volume<float> compensate_depth(const Volume<float>& v, double attenuation_per_mm);
 Mask threshold(const Volume<float>& v, float low, float high);
+// The voxels of a label map whose value is one of `labels`.
+Mask select_labels(const Volume<float>& labels_map, const std::vector<int>& labels);
 
 enum class ComponentChoice { largest, largest_interior, containing_seed };
 // Throws std::runtime_error when there is no such component (an empty segmentation), naming why.

@@ -30,12 +30,21 @@ std::string extension(const std::filesystem::path& path) {
   return e;
 }
 
-// Runs a reader with VTK's own messages off (the errors thrown say what is wrong).
+// VTK's own messages off while it lives (the errors thrown here say what is wrong).
+class QuietVtk {
+ public:
+  QuietVtk() : previous_(vtkObject::GetGlobalWarningDisplay()) { vtkObject::GlobalWarningDisplayOff(); }
+  ~QuietVtk() { vtkObject::SetGlobalWarningDisplay(previous_); }
+  QuietVtk(const QuietVtk&) = delete;
+  QuietVtk& operator=(const QuietVtk&) = delete;
+
+ private:
+  int previous_;
+};
+
 vtkImageData* run(vtkAlgorithm* reader) {
-  const int warnings = vtkObject::GetGlobalWarningDisplay();
-  vtkObject::GlobalWarningDisplayOff();
+  const QuietVtk quiet;
   reader->Update();
-  vtkObject::SetGlobalWarningDisplay(warnings);
   return vtkImageData::SafeDownCast(reader->GetOutputDataObject(0));
 }
 
@@ -147,25 +156,25 @@ void write_volume(const Volume<std::uint8_t>& volume, const std::filesystem::pat
   std::copy(volume.data.begin(), volume.data.end(), data->GetPointer(0));
   image->GetPointData()->SetScalars(data);
   const std::string e = extension(path);
-  int ok = 0;
-  const int warnings = vtkObject::GetGlobalWarningDisplay();
-  vtkObject::GlobalWarningDisplayOff();
-  if (e == ".mha" || e == ".mhd") {
-    auto w = vtkSmartPointer<vtkMetaImageWriter>::New();
-    w->SetFileName(name.c_str());
-    w->SetCompression(true);
-    w->SetInputData(image);
-    w->Write();
-    ok = w->GetErrorCode() == 0;
-  } else if (e == ".vti") {
-    auto w = vtkSmartPointer<vtkXMLImageDataWriter>::New();
-    w->SetFileName(name.c_str());
-    w->SetInputData(image);
-    ok = w->Write();
-  }
-  vtkObject::SetGlobalWarningDisplay(warnings);
   if (e != ".mha" && e != ".mhd" && e != ".vti")
     throw std::runtime_error(name + ": volumes are written as .mha, .mhd or .vti");
+  int ok = 0;
+  {
+    const QuietVtk quiet;
+    if (e == ".vti") {
+      auto w = vtkSmartPointer<vtkXMLImageDataWriter>::New();
+      w->SetFileName(name.c_str());
+      w->SetInputData(image);
+      ok = w->Write();
+    } else {
+      auto w = vtkSmartPointer<vtkMetaImageWriter>::New();
+      w->SetFileName(name.c_str());
+      w->SetCompression(true);
+      w->SetInputData(image);
+      w->Write();
+      ok = w->GetErrorCode() == 0;
+    }
+  }
   if (!ok || !std::filesystem::exists(path)) throw std::runtime_error(name + ": could not be written");
 }
 

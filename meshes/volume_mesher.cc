@@ -43,6 +43,12 @@ Vec cross(const Vec& a, const Vec& b) { return {a[1] * b[2] - a[2] * b[1], a[2] 
 double dot(const Vec& a, const Vec& b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
 double norm(const Vec& a) { return std::sqrt(dot(a, a)); }
 
+// The signed volume of a tetrahedron: positive when (1 - 0, 2 - 0, 3 - 0) is right-handed.
+double signed_volume(const std::vector<Vec>& nodes, const std::array<int, 4>& t) {
+  const Vec& o = nodes[t[0]];
+  return dot(sub(nodes[t[1]], o), cross(sub(nodes[t[2]], o), sub(nodes[t[3]], o))) / 6;
+}
+
 long open_edges(vtkPolyData* surface) {
   auto edges = vtkSmartPointer<vtkFeatureEdges>::New();
   edges->SetInputData(surface);
@@ -81,7 +87,8 @@ QualityReport mesh_quality(const std::vector<std::array<double, 3>>& nodes, cons
   static const int faces[4][3] = {{1, 2, 3}, {0, 3, 2}, {0, 1, 3}, {0, 2, 1}};  // face opposite vertex f
   for (const auto& t : tets) {
     const Vec p[4] = {nodes[t[0]], nodes[t[1]], nodes[t[2]], nodes[t[3]]};
-    const double volume = dot(sub(p[1], p[0]), cross(sub(p[2], p[0]), sub(p[3], p[0]))) / 6;
+    const double volume = signed_volume(nodes, t);
+    q.volume_m3 += volume;
     double scale = 0;
     for (int a = 0; a < 4; ++a)
       for (int b = a + 1; b < 4; ++b) scale = std::max(scale, norm(sub(p[a], p[b])));
@@ -300,8 +307,7 @@ VolumeMesh mesh_mask(const MaskVolume& mask, const MeshingSettings& s) {
     for (std::size_t e = 0; e < element_nodes.size(); e += 4) {
       std::array<int, 4> t{index.at(element_nodes[e]), index.at(element_nodes[e + 1]), index.at(element_nodes[e + 2]),
                            index.at(element_nodes[e + 3])};
-      const auto& p = out.nodes_m;
-      if (dot(sub(p[t[1]], p[t[0]]), cross(sub(p[t[2]], p[t[0]]), sub(p[t[3]], p[t[0]]))) < 0) std::swap(t[2], t[3]);
+      if (signed_volume(out.nodes_m, t) < 0) std::swap(t[2], t[3]);
       out.tetrahedra.push_back(t);
     }
     element_tags.clear(), element_nodes.clear();
@@ -322,11 +328,7 @@ VolumeMesh mesh_mask(const MaskVolume& mask, const MeshingSettings& s) {
   } catch (const std::string& e) {
     throw std::runtime_error("meshing: Gmsh: " + e);
   }
-  report(s, "quality report", 0.95);
-  for (const auto& t : out.tetrahedra) {
-    const auto& p = out.nodes_m;
-    out.volume_m3 += dot(sub(p[t[1]], p[t[0]]), cross(sub(p[t[2]], p[t[0]]), sub(p[t[3]], p[t[0]]))) / 6;
-  }
+  out.volume_m3 = out.quality.volume_m3;
   report(s, "done", 1.0);
   return out;
 }

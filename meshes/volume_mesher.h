@@ -42,6 +42,7 @@ struct QualityReport {
   double min_radius_ratio = 0;                // 3 r_inscribed / R_circumscribed: 1 regular, 0 flat
   std::array<long, 10> radius_ratio_histogram{};  // 0.1 bins
   long inverted = 0, degenerate = 0;
+  double volume_m3 = 0;  // the sum of the signed volumes
 };
 
 struct VolumeMesh {

@@ -37,13 +37,9 @@ struct MeshOptions {
 };
 
 imaging::Mask segment(const imaging::Volume<float>& v, const MeshOptions& o) {
-  if (!o.labels.empty()) {
-    imaging::Mask m = imaging::threshold(v, 1e30f, 0);  // all zero, same geometry
-    for (std::size_t a = 0; a < v.data.size(); ++a)
-      for (int label : o.labels)
-        if (static_cast<int>(v.data[a]) == label) m.data[a] = 1;
-    return imaging::fill_holes(imaging::connected_component(m, imaging::ComponentChoice::largest));
-  }
+  if (!o.labels.empty())
+    return imaging::fill_holes(
+        imaging::connected_component(imaging::select_labels(v, o.labels), imaging::ComponentChoice::largest));
   if (o.fetus) return imaging::segment_fetus(v, imaging::FetusSegmentation{});
   const imaging::Volume<float> smooth = imaging::gaussian_smooth(v, o.smoothing_mm);
   float t = o.threshold;
