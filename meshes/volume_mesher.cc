@@ -1,5 +1,7 @@
 #include "meshes/volume_mesher.h"
 
+#include "meshes/tet_repair.h"
+
 #include <gmsh.h>
 #include <vtkCellArray.h>
 #include <vtkCellData.h>
@@ -43,12 +45,6 @@ Vec cross(const Vec& a, const Vec& b) { return {a[1] * b[2] - a[2] * b[1], a[2] 
 double dot(const Vec& a, const Vec& b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
 double norm(const Vec& a) { return std::sqrt(dot(a, a)); }
 
-// The signed volume of a tetrahedron: positive when (1 - 0, 2 - 0, 3 - 0) is right-handed.
-double signed_volume(const std::vector<Vec>& nodes, const std::array<int, 4>& t) {
-  const Vec& o = nodes[t[0]];
-  return dot(sub(nodes[t[1]], o), cross(sub(nodes[t[2]], o), sub(nodes[t[3]], o))) / 6;
-}
-
 long open_edges(vtkPolyData* surface) {
   auto edges = vtkSmartPointer<vtkFeatureEdges>::New();
   edges->SetInputData(surface);
@@ -58,6 +54,21 @@ long open_edges(vtkPolyData* surface) {
   edges->ManifoldEdgesOff();
   edges->Update();
   return edges->GetOutput()->GetNumberOfCells();
+}
+
+// Windowed-sinc smoothing: a low-pass filter on the surface that, unlike Laplacian smoothing,
+// does not shrink it.
+vtkSmartPointer<vtkPolyData> smoothed(vtkPolyData* surface, int iterations) {
+  auto smooth = vtkSmartPointer<vtkWindowedSincPolyDataFilter>::New();
+  smooth->SetInputData(surface);
+  smooth->SetNumberOfIterations(iterations);
+  smooth->SetPassBand(0.1);
+  smooth->BoundarySmoothingOff();
+  smooth->FeatureEdgeSmoothingOff();
+  smooth->NonManifoldSmoothingOn();
+  smooth->NormalizeCoordinatesOn();
+  smooth->Update();
+  return smooth->GetOutput();
 }
 
 void report(const MeshingSettings& s, const std::string& step, double done) {
@@ -79,6 +90,22 @@ struct GmshSession {
   ~GmshSession() { gmsh::finalize(); }
 };
 
+// Refuses settings that make no sense or a mesh too large for the memory, from the volume to fill.
+void check_settings(double volume_mm3, const MeshingSettings& s) {
+  if (!(s.element_size_mm > 0)) throw std::runtime_error("meshing: the element size must be positive");
+  if (s.refine_radius_mm > 0 && !(s.refine_size_mm > 0))
+    throw std::runtime_error("meshing: the refinement size must be positive");
+  // A regular tetrahedron of edge a has a volume of a^3 / (6 sqrt 2).
+  const auto tetrahedra_in = [](double v, double size_mm) { return v / (std::pow(size_mm, 3) / (6 * std::sqrt(2.0))); };
+  double estimate = tetrahedra_in(volume_mm3, s.element_size_mm);
+  if (s.refine_radius_mm > 0) estimate += tetrahedra_in(4 * M_PI / 3 * std::pow(2 * s.refine_radius_mm, 3), s.refine_size_mm);
+  if (estimate > 2e7)
+    throw std::runtime_error("meshing: an element size of " + std::to_string(s.element_size_mm) + " mm" +
+                             (s.refine_radius_mm > 0 ? " (" + std::to_string(s.refine_size_mm) + " mm refined)" : "") +
+                             " would make about " + std::to_string(static_cast<long>(estimate)) +
+                             " tetrahedra, more than memory allows (20 million)");
+}
+
 }  // namespace
 
 QualityReport mesh_quality(const std::vector<std::array<double, 3>>& nodes, const std::vector<std::array<int, 4>>& tets) {
@@ -87,7 +114,7 @@ QualityReport mesh_quality(const std::vector<std::array<double, 3>>& nodes, cons
   static const int faces[4][3] = {{1, 2, 3}, {0, 3, 2}, {0, 1, 3}, {0, 2, 1}};  // face opposite vertex f
   for (const auto& t : tets) {
     const Vec p[4] = {nodes[t[0]], nodes[t[1]], nodes[t[2]], nodes[t[3]]};
-    const double volume = signed_volume(nodes, t);
+    const double volume = tet_signed_volume(p[0], p[1], p[2], p[3]);
     q.volume_m3 += volume;
     double scale = 0;
     for (int a = 0; a < 4; ++a)
@@ -97,23 +124,13 @@ QualityReport mesh_quality(const std::vector<std::array<double, 3>>& nodes, cons
       q.min_dihedral_deg = 0, q.min_radius_ratio = 0;
       continue;
     }
-    // Outward face normals; the dihedral angle at the edge shared by faces f and g is pi minus the
-    // angle between their normals.
-    Vec n[4];
     double area = 0;
-    for (int f = 0; f < 4; ++f) {
-      n[f] = cross(sub(p[faces[f][1]], p[faces[f][0]]), sub(p[faces[f][2]], p[faces[f][0]]));
-      area += norm(n[f]) / 2;
-      const double length = norm(n[f]);
-      for (double& c : n[f]) c /= length;
+    for (const auto& f : faces) area += norm(cross(sub(p[f[1]], p[f[0]]), sub(p[f[2]], p[f[0]]))) / 2;
+    for (double angle : dihedral_angles_deg(p[0], p[1], p[2], p[3])) {
+      q.min_dihedral_deg = std::min(q.min_dihedral_deg, angle);
+      q.max_dihedral_deg = std::max(q.max_dihedral_deg, angle);
+      ++q.dihedral_histogram[std::min(17, static_cast<int>(angle / 10))];
     }
-    for (int f = 0; f < 4; ++f)
-      for (int g = f + 1; g < 4; ++g) {
-        const double angle = 180 - std::acos(std::clamp(dot(n[f], n[g]), -1.0, 1.0)) * 180 / M_PI;
-        q.min_dihedral_deg = std::min(q.min_dihedral_deg, angle);
-        q.max_dihedral_deg = std::max(q.max_dihedral_deg, angle);
-        ++q.dihedral_histogram[std::min(17, static_cast<int>(angle / 10))];
-      }
     // Radius ratio 3 r / R: r = 3V / area; R from the products of opposite edges' lengths.
     const double a = norm(sub(p[0], p[1])) * norm(sub(p[2], p[3])), b = norm(sub(p[0], p[2])) * norm(sub(p[1], p[3])),
                  c = norm(sub(p[0], p[3])) * norm(sub(p[1], p[2]));
@@ -126,18 +143,167 @@ QualityReport mesh_quality(const std::vector<std::array<double, 3>>& nodes, cons
   return q;
 }
 
+namespace {
+
+// Orients, checks (and where it can, repairs) a triangle surface in millimetres, and fills it with
+// tetrahedra (metres).
+VolumeMesh fill_surface(vtkSmartPointer<vtkPolyData> surface, const MeshingSettings& s, VolumeMesh out) {
+  auto triangles = vtkSmartPointer<vtkTriangleFilter>::New();
+  triangles->SetInputData(surface);
+  auto tidy = vtkSmartPointer<vtkCleanPolyData>::New();
+  tidy->SetInputConnection(triangles->GetOutputPort());
+  auto oriented = vtkSmartPointer<vtkPolyDataNormals>::New();
+  oriented->SetInputConnection(tidy->GetOutputPort());
+  oriented->ConsistencyOn();
+  oriented->AutoOrientNormalsOn();
+  oriented->SplittingOff();
+  oriented->Update();
+  surface = oriented->GetOutput();
+  if (open_edges(surface) > 0) {
+    auto fill = vtkSmartPointer<vtkFillHolesFilter>::New();
+    fill->SetInputData(surface);
+    fill->SetHoleSize(1e9);
+    fill->Update();
+    surface = fill->GetOutput();
+    const long left = open_edges(surface);
+    if (left > 0)
+      throw std::runtime_error("meshing: the surface has " + std::to_string(left) +
+                               " boundary or non-manifold edges that could not be repaired");
+  }
+  if (out.segmented_volume_m3 == 0) {  // a surface given as such: its own volume is the reference
+    auto mass = vtkSmartPointer<vtkMassProperties>::New();
+    mass->SetInputData(surface);
+    mass->Update();
+    out.segmented_volume_m3 = mass->GetVolume() * 1e-9;
+    check_settings(mass->GetVolume(), s);
+  }
+  out.closed_manifold = true;
+  out.surface_triangles = surface->GetNumberOfPolys();
+
+  // 3. Gmsh fills the surface with tetrahedra.
+  report(s, "volume meshing", 0.3);
+  GmshSession session;
+  std::vector<std::size_t> node_tags(surface->GetNumberOfPoints());
+  std::vector<double> coordinates;
+  coordinates.reserve(3 * node_tags.size());
+  for (vtkIdType i = 0; i < surface->GetNumberOfPoints(); ++i) {
+    double x[3];
+    surface->GetPoint(i, x);
+    node_tags[i] = std::size_t(i) + 1;
+    for (double c : x) coordinates.push_back(c * 1e-3);  // mm -> m
+  }
+  std::vector<std::size_t> triangle_nodes;
+  auto ids = vtkSmartPointer<vtkIdList>::New();
+  for (vtkIdType c = 0; c < surface->GetNumberOfCells(); ++c) {
+    surface->GetCellPoints(c, ids);
+    for (vtkIdType k = 0; k < 3; ++k) triangle_nodes.push_back(std::size_t(ids->GetId(k)) + 1);
+  }
+  const auto add_surface = [&] {
+    gmsh::model::add("tissue");
+    gmsh::model::addDiscreteEntity(2, 1);
+    gmsh::model::mesh::addNodes(2, 1, node_tags, coordinates);
+    gmsh::model::mesh::addElementsByType(1, 2, {}, triangle_nodes);
+  };
+  // The surface is split into patches Gmsh can parametrise and remesh at the target size (the
+  // decimated triangles are too uneven for good tetrahedra next to them). No feature angle: the
+  // tissue's surface is smooth, and feature curves kept the decimation's folds as creases. A
+  // surface Gmsh cannot parametrise is kept as it is.
+  std::vector<int> patch_tags{1};
+  try {
+    add_surface();
+    gmsh::model::mesh::classifySurfaces(M_PI, true, true, M_PI);
+    gmsh::model::mesh::createGeometry();
+    std::vector<std::pair<int, int>> patches;
+    gmsh::model::getEntities(patches, 2);
+    patch_tags.clear();
+    for (const auto& [dim, tag] : patches) patch_tags.push_back(tag);
+    out.surface_remeshed = true;
+  } catch (const std::string&) {
+    gmsh::model::remove();
+    add_surface();
+  }
+  try {
+    const int loop = gmsh::model::geo::addSurfaceLoop(patch_tags);
+    gmsh::model::geo::addVolume({loop}, 1);
+    gmsh::model::geo::synchronize();
+  } catch (const std::string& e) {
+    throw std::runtime_error("meshing: Gmsh could not bound a volume by the surface: " + e);
+  }
+  const double h = s.element_size_mm * 1e-3;
+  gmsh::option::setNumber("Mesh.MeshSizeMax", h);
+  gmsh::option::setNumber("Mesh.MeshSizeMin", 0.2 * (s.refine_radius_mm > 0 ? std::min(h, s.refine_size_mm * 1e-3) : h));
+  if (s.refine_radius_mm > 0) {
+    // Finer elements in a ball (where the probe touches), grading to the element size over one
+    // more radius.
+    const int ball = gmsh::model::mesh::field::add("Ball");
+    gmsh::model::mesh::field::setNumber(ball, "Radius", s.refine_radius_mm * 1e-3);
+    gmsh::model::mesh::field::setNumber(ball, "Thickness", s.refine_radius_mm * 1e-3);
+    gmsh::model::mesh::field::setNumber(ball, "VIn", s.refine_size_mm * 1e-3);
+    gmsh::model::mesh::field::setNumber(ball, "VOut", h);
+    gmsh::model::mesh::field::setNumber(ball, "XCenter", s.refine_center_mm[0] * 1e-3);
+    gmsh::model::mesh::field::setNumber(ball, "YCenter", s.refine_center_mm[1] * 1e-3);
+    gmsh::model::mesh::field::setNumber(ball, "ZCenter", s.refine_center_mm[2] * 1e-3);
+    gmsh::model::mesh::field::setAsBackgroundMesh(ball);
+  }
+  gmsh::option::setNumber("Mesh.Optimize", 1);
+  // HXT, then the optimiser on every element of quality (gamma) under 0.5: on the phantom's fetus
+  // the plain Delaunay mesher left slivers of 1.3 degrees, HXT with the default threshold 9.3.
+  gmsh::option::setNumber("Mesh.Algorithm3D", 10);
+  gmsh::option::setNumber("Mesh.OptimizeThreshold", 0.5);
+  try {
+    gmsh::model::mesh::generate(3);
+    report(s, "quality optimisation", 0.8);
+    // Debian's Gmsh has no Netgen: its own optimiser, then node relocation.
+    gmsh::model::mesh::optimize("", false, 2);
+    gmsh::model::mesh::optimize("Relocate3D");
+  } catch (const std::string& e) {  // Gmsh's API throws its message as a string
+    throw std::runtime_error("meshing: Gmsh could not fill the surface: " + e);
+  } catch (const std::exception& e) {
+    throw std::runtime_error(std::string("meshing: Gmsh could not fill the surface: ") + e.what());
+  }
+  try {
+    std::vector<std::size_t> mesh_tags, element_tags, element_nodes;  // Gmsh takes non-empty vectors as preallocated
+    std::vector<double> all_coordinates, parametric;
+    gmsh::model::mesh::getNodes(mesh_tags, all_coordinates, parametric, -1, -1, false, false);
+    std::map<std::size_t, int> index;
+    for (std::size_t i = 0; i < mesh_tags.size(); ++i) {
+      index[mesh_tags[i]] = static_cast<int>(i);
+      out.nodes_m.push_back({all_coordinates[3 * i], all_coordinates[3 * i + 1], all_coordinates[3 * i + 2]});
+    }
+    gmsh::model::mesh::getElementsByType(4, element_tags, element_nodes, -1);
+    if (element_nodes.empty()) throw std::runtime_error("meshing: Gmsh made no tetrahedra");
+    for (std::size_t e = 0; e < element_nodes.size(); e += 4) {
+      Tet t{index.at(element_nodes[e]), index.at(element_nodes[e + 1]), index.at(element_nodes[e + 2]),
+            index.at(element_nodes[e + 3])};
+      if (tet_signed_volume(out.nodes_m[t[0]], out.nodes_m[t[1]], out.nodes_m[t[2]], out.nodes_m[t[3]]) < 0)
+        std::swap(t[2], t[3]);
+      out.tetrahedra.push_back(t);
+    }
+  } catch (const std::string& e) {
+    throw std::runtime_error("meshing: Gmsh: " + e);
+  }
+  // Slivers the optimiser left (against the surface, whose nodes it keeps): peeled, flipped away
+  // or relocated (meshes/tet_repair.h), then the boundary as the elements now have it.
+  report(s, "sliver repair", 0.9);
+  out.repair = repair_slivers(out.nodes_m, out.tetrahedra, 12);
+  out.boundary = boundary_faces(out.tetrahedra);
+  out.closed_manifold = boundary_is_closed_manifold(out.tetrahedra);
+  out.quality = mesh_quality(out.nodes_m, out.tetrahedra);
+  out.volume_m3 = out.quality.volume_m3;
+  report(s, "done", 1.0);
+  return out;
+}
+
+}  // namespace
+
 VolumeMesh mesh_mask(const MaskVolume& mask, const MeshingSettings& s) {
-  if (!(s.element_size_mm > 0)) throw std::runtime_error("meshing: the element size must be positive");
   VolumeMesh out;
   long voxels = 0;
   for (auto v : mask.data) voxels += v != 0;
   if (voxels == 0) throw std::runtime_error("meshing: the segmentation is empty (no voxel set)");
   const double voxel_mm3 = mask.spacing_mm[0] * mask.spacing_mm[1] * mask.spacing_mm[2];
   out.segmented_volume_m3 = voxels * voxel_mm3 * 1e-9;
-  const double estimate = voxels * voxel_mm3 / (std::pow(s.element_size_mm, 3) / (6 * std::sqrt(2.0))) ;
-  if (estimate > 2e7)
-    throw std::runtime_error("meshing: an element size of " + std::to_string(s.element_size_mm) + " mm would make about " +
-                             std::to_string(static_cast<long>(estimate)) + " tetrahedra, more than memory allows (20 million)");
+  check_settings(voxels * voxel_mm3, s);
 
   // 1. The mask, padded by two empty voxels (so that the surface closes at the volume's faces).
   report(s, "surface extraction", 0.0);
@@ -176,22 +342,13 @@ VolumeMesh mesh_mask(const MaskVolume& mask, const MeshingSettings& s) {
 
   // 2. Smoothing that does not shrink, decimation towards the element size.
   report(s, "surface clean-up", 0.15);
-  auto smooth = vtkSmartPointer<vtkWindowedSincPolyDataFilter>::New();
-  smooth->SetInputConnection(clean->GetOutputPort());
-  smooth->SetNumberOfIterations(s.smoothing_iterations);
-  smooth->SetPassBand(0.1);
-  smooth->BoundarySmoothingOff();
-  smooth->FeatureEdgeSmoothingOff();
-  smooth->NonManifoldSmoothingOn();
-  smooth->NormalizeCoordinatesOn();
-  smooth->Update();
+  vtkSmartPointer<vtkPolyData> surface = smoothed(clean->GetOutput(), s.smoothing_iterations);
   auto mass = vtkSmartPointer<vtkMassProperties>::New();
-  mass->SetInputConnection(smooth->GetOutputPort());
+  mass->SetInputData(surface);
   mass->Update();
   const double triangle_area = std::sqrt(3.0) / 4 * s.element_size_mm * s.element_size_mm;
   const double wanted = std::max(200.0, mass->GetSurfaceArea() / triangle_area);
-  const double have = smooth->GetOutput()->GetNumberOfPolys();
-  vtkSmartPointer<vtkPolyData> surface = smooth->GetOutput();
+  const double have = surface->GetNumberOfPolys();
   if (wanted < have) {
     auto decimate = vtkSmartPointer<vtkQuadricDecimation>::New();
     decimate->SetInputData(surface);
@@ -199,138 +356,32 @@ VolumeMesh mesh_mask(const MaskVolume& mask, const MeshingSettings& s) {
     decimate->VolumePreservationOn();
     decimate->Update();
     surface = decimate->GetOutput();
+    // Decimation folds the surface here and there; smoothing again unfolds it (else Gmsh cannot
+    // parametrise the spine's surface, and the folds make slivers).
+    surface = smoothed(decimate->GetOutput(), 10);
   }
-  auto triangles = vtkSmartPointer<vtkTriangleFilter>::New();
-  triangles->SetInputData(surface);
-  auto tidy = vtkSmartPointer<vtkCleanPolyData>::New();
-  tidy->SetInputConnection(triangles->GetOutputPort());
-  auto oriented = vtkSmartPointer<vtkPolyDataNormals>::New();
-  oriented->SetInputConnection(tidy->GetOutputPort());
-  oriented->ConsistencyOn();
-  oriented->AutoOrientNormalsOn();
-  oriented->SplittingOff();
-  oriented->Update();
-  surface = oriented->GetOutput();
-  if (open_edges(surface) > 0) {
-    auto fill = vtkSmartPointer<vtkFillHolesFilter>::New();
-    fill->SetInputData(surface);
-    fill->SetHoleSize(1e9);
-    fill->Update();
-    surface = fill->GetOutput();
-    const long left = open_edges(surface);
-    if (left > 0)
-      throw std::runtime_error("meshing: the surface has " + std::to_string(left) +
-                               " boundary or non-manifold edges that could not be repaired");
-  }
-  out.closed_manifold = true;
-  out.surface_triangles = surface->GetNumberOfPolys();
+  return fill_surface(surface, s, out);
+}
 
-  // 3. Gmsh fills the surface with tetrahedra.
-  report(s, "volume meshing", 0.3);
-  GmshSession session;
-  std::vector<std::size_t> node_tags(surface->GetNumberOfPoints());
-  std::vector<double> coordinates;
-  coordinates.reserve(3 * node_tags.size());
-  for (vtkIdType i = 0; i < surface->GetNumberOfPoints(); ++i) {
-    double x[3];
-    surface->GetPoint(i, x);
-    node_tags[i] = std::size_t(i) + 1;
-    for (double c : x) coordinates.push_back(c * 1e-3);  // mm -> m
+VolumeMesh mesh_triangle_surface(const std::vector<Point3>& nodes_mm, const std::vector<Triangle>& triangles,
+                                 const MeshingSettings& s) {
+  auto surface = vtkSmartPointer<vtkPolyData>::New();
+  auto points = vtkSmartPointer<vtkPoints>::New();
+  points->SetDataTypeToDouble();
+  for (const auto& p : nodes_mm) points->InsertNextPoint(p.data());
+  auto cells = vtkSmartPointer<vtkCellArray>::New();
+  for (const auto& t : triangles) {
+    for (int v : t)
+      if (v < 0 || v >= static_cast<int>(nodes_mm.size()))
+        throw std::runtime_error("meshing: a triangle refers to node " + std::to_string(v) + " of " +
+                                 std::to_string(nodes_mm.size()));
+    const vtkIdType ids[3] = {t[0], t[1], t[2]};
+    cells->InsertNextCell(3, ids);
   }
-  std::vector<std::size_t> triangle_nodes;
-  auto ids = vtkSmartPointer<vtkIdList>::New();
-  for (vtkIdType c = 0; c < surface->GetNumberOfCells(); ++c) {
-    surface->GetCellPoints(c, ids);
-    for (vtkIdType k = 0; k < 3; ++k) triangle_nodes.push_back(std::size_t(ids->GetId(k)) + 1);
-  }
-  const auto add_surface = [&] {
-    gmsh::model::add("tissue");
-    gmsh::model::addDiscreteEntity(2, 1);
-    gmsh::model::mesh::addNodes(2, 1, node_tags, coordinates);
-    gmsh::model::mesh::addElementsByType(1, 2, {}, triangle_nodes);
-  };
-  // The surface is split into patches Gmsh can parametrise and remesh at the target size (the
-  // decimated triangles are too uneven for good tetrahedra next to them). A surface it cannot
-  // parametrise (a shape with handles, like a spine's) is kept as it is.
-  std::vector<int> patch_tags{1};
-  try {
-    add_surface();
-    gmsh::model::mesh::classifySurfaces(40 * M_PI / 180, true, true, M_PI);
-    gmsh::model::mesh::createGeometry();
-    std::vector<std::pair<int, int>> patches;
-    gmsh::model::getEntities(patches, 2);
-    patch_tags.clear();
-    for (const auto& [dim, tag] : patches) patch_tags.push_back(tag);
-    out.surface_remeshed = true;
-  } catch (const std::string&) {
-    gmsh::model::remove();
-    add_surface();
-  }
-  try {
-    const int loop = gmsh::model::geo::addSurfaceLoop(patch_tags);
-    gmsh::model::geo::addVolume({loop}, 1);
-    gmsh::model::geo::synchronize();
-  } catch (const std::string& e) {
-    throw std::runtime_error("meshing: Gmsh could not bound a volume by the surface: " + e);
-  }
-  const double h = s.element_size_mm * 1e-3;
-  gmsh::option::setNumber("Mesh.MeshSizeMax", h);
-  gmsh::option::setNumber("Mesh.MeshSizeMin", 0.2 * h);
-  gmsh::option::setNumber("Mesh.Optimize", 1);
-  // HXT, then the optimiser on every element of quality (gamma) under 0.5: on the phantom's fetus
-  // the plain Delaunay mesher left slivers of 1.3 degrees, HXT with the default threshold 9.3.
-  gmsh::option::setNumber("Mesh.Algorithm3D", 10);
-  gmsh::option::setNumber("Mesh.OptimizeThreshold", 0.5);
-  try {
-    gmsh::model::mesh::generate(3);
-    report(s, "quality optimisation", 0.8);
-    // Debian's Gmsh has no Netgen: its own optimiser, then node relocation.
-    gmsh::model::mesh::optimize("", false, 2);
-    gmsh::model::mesh::optimize("Relocate3D");
-  } catch (const std::string& e) {  // Gmsh's API throws its message as a string
-    throw std::runtime_error("meshing: Gmsh could not fill the surface: " + e);
-  } catch (const std::exception& e) {
-    throw std::runtime_error(std::string("meshing: Gmsh could not fill the surface: ") + e.what());
-  }
-  const auto extract = [&] {
-    out.nodes_m.clear(), out.tetrahedra.clear(), out.boundary.clear();
-    std::vector<std::size_t> all_tags, element_tags, element_nodes;  // Gmsh takes non-empty vectors as preallocated
-    std::vector<double> all_coordinates, parametric;
-    gmsh::model::mesh::getNodes(all_tags, all_coordinates, parametric, -1, -1, false, false);
-    std::map<std::size_t, int> index;
-    for (std::size_t i = 0; i < all_tags.size(); ++i) {
-      index[all_tags[i]] = static_cast<int>(i);
-      out.nodes_m.push_back({all_coordinates[3 * i], all_coordinates[3 * i + 1], all_coordinates[3 * i + 2]});
-    }
-    gmsh::model::mesh::getElementsByType(4, element_tags, element_nodes, -1);
-    if (element_nodes.empty()) throw std::runtime_error("meshing: Gmsh made no tetrahedra");
-    for (std::size_t e = 0; e < element_nodes.size(); e += 4) {
-      std::array<int, 4> t{index.at(element_nodes[e]), index.at(element_nodes[e + 1]), index.at(element_nodes[e + 2]),
-                           index.at(element_nodes[e + 3])};
-      if (signed_volume(out.nodes_m, t) < 0) std::swap(t[2], t[3]);
-      out.tetrahedra.push_back(t);
-    }
-    element_tags.clear(), element_nodes.clear();
-    gmsh::model::mesh::getElementsByType(2, element_tags, element_nodes, -1);
-    for (std::size_t e = 0; e < element_nodes.size(); e += 3)
-      out.boundary.push_back({index.at(element_nodes[e]), index.at(element_nodes[e + 1]), index.at(element_nodes[e + 2])});
-    out.quality = mesh_quality(out.nodes_m, out.tetrahedra);
-  };
-  try {
-    extract();
-    // Slivers left: optimise again, more widely, and move nodes.
-    for (int pass = 0; pass < 4 && out.quality.min_dihedral_deg < 10; ++pass) {
-      gmsh::option::setNumber("Mesh.OptimizeThreshold", 0.6 + 0.1 * pass);
-      gmsh::model::mesh::optimize("", false, 1);
-      gmsh::model::mesh::optimize("Relocate3D");
-      extract();
-    }
-  } catch (const std::string& e) {
-    throw std::runtime_error("meshing: Gmsh: " + e);
-  }
-  out.volume_m3 = out.quality.volume_m3;
-  report(s, "done", 1.0);
-  return out;
+  surface->SetPoints(points);
+  surface->SetPolys(cells);
+  if (triangles.empty()) throw std::runtime_error("meshing: the surface has no triangle");
+  return fill_surface(surface, s, VolumeMesh{});
 }
 
 void write_volume_mesh(const VolumeMesh& mesh, const std::filesystem::path& path, int partitions) {

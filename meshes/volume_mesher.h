@@ -3,8 +3,8 @@
 //   2. clean-up: windowed-sinc smoothing (which does not shrink), the largest connected piece only,
 //      quadric decimation towards the target element size; the surface must come out closed and
 //      manifold (no boundary or non-manifold edge), else it is refused;
-//   3. volume meshing by Gmsh inside that surface (kept as the mesh's boundary) at the target size,
-//      then Gmsh's optimisation (and Netgen's) for quality;
+//   3. volume meshing by Gmsh inside that surface (remeshed at the target size where Gmsh can
+//      parametrise it), Gmsh's optimisation, then the sliver repair of meshes/tet_repair.h;
 //   4. a quality report: dihedral angles and radius ratios (minimum and histogram), inverted and
 //      degenerate elements;
 //   5. output as Gmsh .msh 4.1 (physical groups `surface` and `tissue`) and VTK .vtu (the
@@ -19,6 +19,8 @@
 #include <string>
 #include <vector>
 
+#include "meshes/tet_repair.h"
+
 namespace fetouch::meshes {
 
 struct MaskVolume {
@@ -32,6 +34,10 @@ struct MeshingSettings {
   double element_size_mm = 4;
   int smoothing_iterations = 20;
   int partitions = 0;  // > 1: METIS partitions (Gmsh)
+  // Refinement: elements of refine_size_mm within refine_radius_mm of refine_center_mm, grading to
+  // element_size_mm over one more radius (none when the radius is 0).
+  std::array<double, 3> refine_center_mm{0, 0, 0};
+  double refine_radius_mm = 0, refine_size_mm = 0;
   // Progress of the long steps: (step name, fraction of the whole done).
   std::function<void(const std::string&, double)> progress;
 };
@@ -55,12 +61,19 @@ struct VolumeMesh {
   long surface_triangles = 0;
   bool closed_manifold = false;
   bool surface_remeshed = false;  // Gmsh parametrised and remeshed the surface (else kept as decimated)
+  SliverRepair repair;            // what the sliver repair did after Gmsh
 };
 
 // Throws std::runtime_error: an empty mask, a surface that is not closed or not manifold after
 // repair, a target size too small for the memory (more than 20 million elements estimated), Gmsh
 // failing.
 VolumeMesh mesh_mask(const MaskVolume& mask, const MeshingSettings& settings);
+
+// The same from a closed triangle surface in millimetres (its enclosed volume is then the
+// reference volume): open edges are filled if they can be; a surface still open or not manifold
+// is refused, as is an empty one.
+VolumeMesh mesh_triangle_surface(const std::vector<Point3>& nodes_mm, const std::vector<Triangle>& triangles,
+                                 const MeshingSettings& settings);
 
 QualityReport mesh_quality(const std::vector<std::array<double, 3>>& nodes, const std::vector<std::array<int, 4>>& tets);
 

@@ -1,11 +1,25 @@
 // `fetouch mesh`, the real binary, on the synthetic phantom's label map and on the shared spine
 // phantom volume: closed, manifold tetrahedral meshes with no inverted element, whose volume is
 // within 3 % of the segmented voxels', reported as JSON, and which the solver's mesh reader loads
-// (.msh through deal.II and Gmsh, .vtu through VTK) with the same volume. Label mesh.
+// (.msh through deal.II and Gmsh, .vtu through VTK) with the same volume. The quality is checked
+// again on the .vtu read by VTK (the smallest dihedral angle measured another way; the tetrahedra's
+// outer faces, whose edges must each have two faces). Label mesh.
 #include <gtest/gtest.h>
 #include <deal.II/grid/tria.h>
 #include <yaml-cpp/yaml.h>
 
+#include <vtkCellData.h>
+#include <vtkDataArray.h>
+#include <vtkFeatureEdges.h>
+#include <vtkGeometryFilter.h>
+#include <vtkMath.h>
+#include <vtkNew.h>
+#include <vtkPolyData.h>
+#include <vtkThreshold.h>
+#include <vtkUnstructuredGrid.h>
+#include <vtkXMLUnstructuredGridReader.h>
+
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 
@@ -19,9 +33,48 @@ namespace {
 
 namespace fs = std::filesystem;
 
-void check_mesh(const std::string& arguments, const fs::path& out) {
+// The tetrahedra of a .vtu (its boundary triangles left out).
+vtkSmartPointer<vtkUnstructuredGrid> read_tetrahedra(const std::string& path) {
+  vtkNew<vtkXMLUnstructuredGridReader> reader;
+  reader->SetFileName(path.c_str());
+  reader->Update();
+  vtkNew<vtkThreshold> tets;  // material_id >= 0: the tetrahedra
+  tets->SetInputConnection(reader->GetOutputPort());
+  tets->SetInputArrayToProcess(0, 0, 0, vtkDataObject::FIELD_ASSOCIATION_CELLS, "material_id");
+  tets->SetUpperThreshold(0);  // THRESHOLD_UPPER keeps values at or above the upper threshold
+  tets->SetThresholdFunction(vtkThreshold::THRESHOLD_UPPER);
+  tets->Update();
+  vtkSmartPointer<vtkUnstructuredGrid> out = tets->GetOutput();
+  return out;
+}
+
+// The smallest dihedral angle of a grid's tetrahedra, measured edge by edge: at edge (a, b), the
+// angle between the other two nodes' offsets from the edge line (a second method beside the
+// program's face normals).
+double smallest_dihedral_deg(vtkUnstructuredGrid* grid) {
+  double smallest = 180;
+  const int pairs[6][4] = {{0, 1, 2, 3}, {0, 2, 1, 3}, {0, 3, 1, 2}, {1, 2, 0, 3}, {1, 3, 0, 2}, {2, 3, 0, 1}};
+  for (vtkIdType c = 0; c < grid->GetNumberOfCells(); ++c) {
+    vtkCell* cell = grid->GetCell(c);
+    double p[4][3];
+    for (int k = 0; k < 4; ++k) grid->GetPoint(cell->GetPointId(k), p[k]);
+    for (const auto& e : pairs) {
+      double axis[3], u[3], w[3];
+      for (int d = 0; d < 3; ++d) axis[d] = p[e[1]][d] - p[e[0]][d];
+      vtkMath::Normalize(axis);
+      for (int d = 0; d < 3; ++d) u[d] = p[e[2]][d] - p[e[0]][d], w[d] = p[e[3]][d] - p[e[0]][d];
+      const double du = vtkMath::Dot(u, axis), dw = vtkMath::Dot(w, axis);
+      for (int d = 0; d < 3; ++d) u[d] -= du * axis[d], w[d] -= dw * axis[d];
+      smallest = std::min(smallest, vtkMath::DegreesFromRadians(vtkMath::AngleBetweenVectors(u, w)));
+    }
+  }
+  return smallest;
+}
+
+YAML::Node check_mesh(const std::string& arguments, const fs::path& out) {
   const auto r = run_command(fetouch("mesh --json " + arguments + " --out " + out.string()));
-  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  if (r.exit_code != 0) return {};
   const YAML::Node j = YAML::Load(r.out);
   std::printf("%s: %ld tetrahedra, volume error %+.2f %%, min dihedral %.1f deg, min radius ratio %.3f, %.1f s\n",
               arguments.c_str(), j["tetrahedra"].as<long>(), 100 * j["volume_error"].as<double>(),
@@ -31,6 +84,19 @@ void check_mesh(const std::string& arguments, const fs::path& out) {
   EXPECT_EQ(j["quality"]["inverted"].as<long>(), 0);
   EXPECT_EQ(j["quality"]["degenerate"].as<long>(), 0);
   EXPECT_LT(std::abs(j["volume_error"].as<double>()), 0.03);
+  EXPECT_GE(j["quality"]["min_dihedral_deg"].as<double>(), 10);
+  // VTK's view of the same file.
+  const auto grid = read_tetrahedra(j["vtu"].as<std::string>());
+  EXPECT_EQ(grid->GetNumberOfCells(), j["tetrahedra"].as<long>());
+  EXPECT_NEAR(smallest_dihedral_deg(grid), j["quality"]["min_dihedral_deg"].as<double>(), 1e-6);
+  vtkNew<vtkGeometryFilter> outer;
+  outer->SetInputData(grid);
+  vtkNew<vtkFeatureEdges> open;
+  open->SetInputConnection(outer->GetOutputPort());
+  open->BoundaryEdgesOn(), open->NonManifoldEdgesOn(), open->FeatureEdgesOff(), open->ManifoldEdgesOff();
+  open->Update();
+  EXPECT_GT(outer->GetOutput()->GetNumberOfPolys(), 0);
+  EXPECT_EQ(open->GetOutput()->GetNumberOfLines(), 0);
   // The solver's reader: both files, the same volume and the named surface.
   for (const std::string key : {"msh", "vtu"}) {
     config::MeshSpec spec;
@@ -42,12 +108,50 @@ void check_mesh(const std::string& arguments, const fs::path& out) {
     EXPECT_NEAR(info.volume_m3, j["volume_m3"].as<double>(), 1e-9 * j["volume_m3"].as<double>()) << key;
     EXPECT_TRUE(info.boundary_ids.count("surface")) << key;
   }
+  return j;
 }
 
 TEST(MeshCommand, PhantomFetusFromItsLabels) {
   const fs::path dir = fs::temp_directory_path() / ("fetouch_mesh_" + std::to_string(::getpid()));
   ASSERT_EQ(run_command(fetouch("phantom --out " + (dir / "phantom").string())).exit_code, 0);
   check_mesh((dir / "phantom" / "phantom_labels.mha").string() + " --labels 3 4 5 6 --size 3", dir / "fetus.msh");
+  // The speckled image through the fetal segmentation.
+  check_mesh((dir / "phantom" / "phantom.mha").string() + " --fetus --size 3", dir / "fetus_image.msh");
+  fs::remove_all(dir);
+}
+
+TEST(MeshCommand, RefinementNearAPoint) {
+  // The whole sac (labels 1-6, about 140 x 110 x 100 mm) at 6 mm, with 2 mm elements within 15 mm
+  // of its centre: the edges near the centre are much shorter than those far from it.
+  const fs::path dir = fs::temp_directory_path() / ("fetouch_mesh_refine_" + std::to_string(::getpid()));
+  ASSERT_EQ(run_command(fetouch("phantom --out " + (dir / "phantom").string())).exit_code, 0);
+  const YAML::Node j = check_mesh((dir / "phantom" / "phantom_labels.mha").string() +
+                                      " --labels 1 2 3 4 5 6 --size 6 --refine 0 0 0 15 2",
+                                  dir / "refined.msh");
+  ASSERT_TRUE(j);
+  const auto grid = read_tetrahedra(j["vtu"].as<std::string>());
+  double near_sum = 0, far_sum = 0;
+  long near = 0, far = 0;
+  for (vtkIdType c = 0; c < grid->GetNumberOfCells(); ++c) {
+    vtkCell* cell = grid->GetCell(c);
+    double centre[3] = {0, 0, 0}, length = 0;
+    for (int k = 0; k < 4; ++k) {
+      double p[3], q[3];
+      grid->GetPoint(cell->GetPointId(k), p);
+      grid->GetPoint(cell->GetPointId((k + 1) % 4), q);
+      length += std::sqrt(vtkMath::Distance2BetweenPoints(p, q)) / 4;
+      for (int d = 0; d < 3; ++d) centre[d] += p[d] / 4;
+    }
+    const double r_mm = 1e3 * std::sqrt(centre[0] * centre[0] + centre[1] * centre[1] + centre[2] * centre[2]);
+    if (r_mm < 12) near_sum += length, ++near;
+    if (r_mm > 45) far_sum += length, ++far;
+  }
+  ASSERT_GT(near, 0);
+  ASSERT_GT(far, 0);
+  std::printf("mean edge %.2f mm within 12 mm of the point (%ld elements), %.2f mm beyond 45 mm (%ld)\n",
+              1e3 * near_sum / near, near, 1e3 * far_sum / far, far);
+  EXPECT_LT(near_sum / near, 0.5 * far_sum / far);
+  EXPECT_LT(1e3 * near_sum / near, 3);
   fs::remove_all(dir);
 }
 

@@ -1,0 +1,379 @@
+#include "meshes/tet_repair.h"
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+
+
+namespace fetouch::meshes {
+
+namespace {
+
+Point3 sub(const Point3& a, const Point3& b) { return {a[0] - b[0], a[1] - b[1], a[2] - b[2]}; }
+Point3 cross(const Point3& a, const Point3& b) {
+  return {a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]};
+}
+double dot(const Point3& a, const Point3& b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
+double norm(const Point3& a) { return std::sqrt(dot(a, a)); }
+
+// The face opposite vertex f, ordered so that its normal (1 - 0) x (2 - 0) points out of a
+// positively oriented element.
+constexpr int kFace[4][3] = {{1, 2, 3}, {0, 3, 2}, {0, 1, 3}, {0, 2, 1}};
+
+Triangle sorted(Triangle f) {
+  std::sort(f.begin(), f.end());
+  return f;
+}
+
+// A mesh being repaired: the elements (dead ones marked), and for each node the live elements
+// that use it. Every adjacency question (is this face, edge or node on the boundary; which
+// elements share this edge) is answered from those lists.
+class RepairMesh {
+ public:
+  RepairMesh(std::vector<Point3>& nodes, std::vector<Tet>& tets) : nodes_(nodes), tets_(tets), alive_(tets.size(), true) {
+    star_.resize(nodes.size());
+    for (int t = 0; t < static_cast<int>(tets.size()); ++t)
+      for (int v : tets[t]) star_[v].push_back(t);
+  }
+
+  double quality(int t) const { return min_dihedral_deg(nodes_, tets_[t]); }
+  double quality(const std::vector<int>& ts) const {
+    double q = 180;
+    for (int t : ts) q = std::min(q, quality(t));
+    return q;
+  }
+  bool alive(int t) const { return alive_[t]; }
+  const Tet& tet(int t) const { return tets_[t]; }
+
+  // The live elements holding all the given nodes.
+  std::vector<int> sharing(std::initializer_list<int> vs) const {
+    const auto first = vs.begin();
+    std::vector<int> out;
+    for (int t : star_[*first]) {
+      bool all = true;
+      for (auto v = first + 1; v != vs.end() && all; ++v) all = std::count(tets_[t].begin(), tets_[t].end(), *v) > 0;
+      if (all) out.push_back(t);
+    }
+    return out;
+  }
+  bool face_on_boundary(int a, int b, int c) const { return sharing({a, b, c}).size() == 1; }
+  bool edge_on_boundary(int a, int b) const {
+    for (int t : sharing({a, b}))
+      for (int c : tets_[t])
+        if (c != a && c != b && face_on_boundary(a, b, c)) return true;
+    return false;
+  }
+  bool node_on_boundary(int v) const {
+    for (int t : star_[v])
+      for (int f = 0; f < 4; ++f)
+        if (tets_[t][f] != v && face_on_boundary(tets_[t][kFace[f][0]], tets_[t][kFace[f][1]], tets_[t][kFace[f][2]]))
+          return true;
+    return false;
+  }
+
+  void kill(int t) {
+    alive_[t] = false;
+    for (int v : tets_[t]) star_[v].erase(std::find(star_[v].begin(), star_[v].end(), t));
+  }
+  void add(Tet t) {
+    if (tet_signed_volume(nodes_[t[0]], nodes_[t[1]], nodes_[t[2]], nodes_[t[3]]) < 0) std::swap(t[2], t[3]);
+    tets_.push_back(t);
+    alive_.push_back(true);
+    for (int v : t) star_[v].push_back(static_cast<int>(tets_.size()) - 1);
+  }
+  double volume(const Tet& t) const { return tet_signed_volume(nodes_[t[0]], nodes_[t[1]], nodes_[t[2]], nodes_[t[3]]); }
+  double abs_volume(const Tet& t) const { return std::abs(volume(t)); }
+  double quality_of(Tet t) const {
+    if (volume(t) < 0) std::swap(t[2], t[3]);
+    return min_dihedral_deg(nodes_, t);
+  }
+
+  // Replaces `old` by `fresh` if they fill the same space (the sum of volumes agrees, so the new
+  // elements neither overlap nor reach outside) and the worst angle improves.
+  bool replace(const std::vector<int>& old, const std::vector<Tet>& fresh) {
+    double before = 0, after = 0;
+    for (int t : old) before += volume(tets_[t]);
+    for (const Tet& t : fresh) {
+      const double v = abs_volume(t);
+      if (!(v > 1e-9 * before)) return false;
+      after += v;
+    }
+    if (std::abs(after - before) > 1e-9 * before) return false;
+    double q_new = 180;
+    for (const Tet& t : fresh) q_new = std::min(q_new, quality_of(t));
+    if (!(q_new > quality(old) + 1e-6)) return false;
+    for (int t : old) kill(t);
+    for (const Tet& t : fresh) add(t);
+    return true;
+  }
+
+  // A sliver with two or three faces on the boundary is cut away, when the boundary stays
+  // manifold without it.
+  bool peel(int t, double* volume_removed) {
+    const Tet& e = tets_[t];
+    std::array<bool, 4> outside{};
+    int count = 0;
+    for (int f = 0; f < 4; ++f) count += outside[f] = face_on_boundary(e[kFace[f][0]], e[kFace[f][1]], e[kFace[f][2]]);
+    if (count == 2) {
+      // The two inner faces share the edge between the vertices opposite the two outer faces;
+      // it becomes a boundary edge and must not be one already.
+      int shared[2], k = 0;
+      for (int f = 0; f < 4; ++f)
+        if (outside[f]) shared[k++] = e[f];
+      if (edge_on_boundary(shared[0], shared[1])) return false;
+    } else if (count == 3) {
+      // The apex (the vertex opposite the inner face) leaves the mesh with the element.
+      int apex = -1;
+      for (int f = 0; f < 4; ++f)
+        if (!outside[f]) apex = e[f];
+      if (star_[apex].size() != 1) return false;
+    } else {
+      return false;
+    }
+    *volume_removed += volume(e);
+    kill(t);
+    return true;
+  }
+
+  // 3-2: the three elements around an interior edge (a, b) become two on the triangle of the ring.
+  bool flip32(int t, int* flips) {
+    const Tet e = tets_[t];
+    for (int i = 0; i < 4; ++i)
+      for (int j = i + 1; j < 4; ++j) {
+        const int a = e[i], b = e[j];
+        const auto ring = sharing({a, b});
+        if (ring.size() != 3 || edge_on_boundary(a, b)) continue;
+        std::vector<int> others;
+        for (int r : ring)
+          for (int v : tets_[r])
+            if (v != a && v != b && std::find(others.begin(), others.end(), v) == others.end()) others.push_back(v);
+        if (others.size() != 3 || !sharing({others[0], others[1], others[2]}).empty()) continue;
+        if (replace(ring, {{others[0], others[1], others[2], a}, {others[0], others[1], others[2], b}})) {
+          ++*flips;
+          return true;
+        }
+      }
+    return false;
+  }
+
+  // 2-3: two elements sharing an interior face (a, b, c) become three around the edge between
+  // their apexes.
+  bool flip23(int t, int* flips) {
+    const Tet e = tets_[t];
+    for (int f = 0; f < 4; ++f) {
+      const int a = e[kFace[f][0]], b = e[kFace[f][1]], c = e[kFace[f][2]], d = e[f];
+      const auto pair = sharing({a, b, c});
+      if (pair.size() != 2) continue;
+      const int other = pair[0] == t ? pair[1] : pair[0];
+      int apex = -1;
+      for (int v : tets_[other])
+        if (v != a && v != b && v != c) apex = v;
+      if (!sharing({d, apex}).empty()) continue;
+      if (replace({t, other}, {{a, b, d, apex}, {b, c, d, apex}, {c, a, d, apex}})) {
+        ++*flips;
+        return true;
+      }
+    }
+    return false;
+  }
+
+  // A node of the element moves towards where each of its elements would be regular on its
+  // opposite face, as far as improves the worst angle around it. A node on the boundary moves only
+  // in the plane tangent to the surface there, and only where the surface around it is nearly flat
+  // (its faces' normals within 25 degrees of their mean), so that the surface keeps its shape.
+  bool relocate(int t) {
+    for (int v : tets_[t]) {
+      const std::vector<int> around = star_[v];
+      Point3 normal{0, 0, 0};
+      std::vector<Point3> face_normals;
+      for (int s : around) {
+        const Tet& e = tets_[s];
+        for (int f = 0; f < 4; ++f) {
+          const int a = e[kFace[f][0]], b = e[kFace[f][1]], c = e[kFace[f][2]];
+          if (e[f] == v || !face_on_boundary(a, b, c)) continue;
+          const Point3 n = cross(sub(nodes_[b], nodes_[a]), sub(nodes_[c], nodes_[a]));
+          face_normals.push_back(n);
+          for (int k = 0; k < 3; ++k) normal[k] += n[k];
+        }
+      }
+      const bool on_boundary = !face_normals.empty();
+      if (on_boundary) {
+        const double length = norm(normal);
+        for (double& c : normal) c /= length;
+        bool flat = true;
+        for (const Point3& n : face_normals) flat = flat && dot(n, normal) > std::cos(25 * M_PI / 180) * norm(n);
+        if (!flat) continue;
+      }
+      Point3 target{0, 0, 0};
+      for (int s : around) {
+        const Tet& e = tets_[s];
+        const int f = static_cast<int>(std::find(e.begin(), e.end(), v) - e.begin());
+        const Point3 &p = nodes_[e[kFace[f][0]]], &q = nodes_[e[kFace[f][1]]], &r = nodes_[e[kFace[f][2]]];
+        Point3 n = cross(sub(q, p), sub(r, p));  // points out of the element, away from v
+        const double length = norm(n);
+        const double edge = (norm(sub(q, p)) + norm(sub(r, q)) + norm(sub(p, r))) / 3;
+        for (int k = 0; k < 3; ++k) target[k] += (p[k] + q[k] + r[k]) / 3 - n[k] / length * edge * std::sqrt(2.0 / 3);
+      }
+      const Point3 start = nodes_[v];
+      Point3 move;
+      for (int k = 0; k < 3; ++k) move[k] = target[k] / around.size() - start[k];
+      if (on_boundary) {
+        const double normal_part = dot(move, normal);
+        for (int k = 0; k < 3; ++k) move[k] -= normal_part * normal[k];
+      }
+      const double q0 = quality(around);
+      double best = q0;
+      Point3 best_point = start;
+      for (double step : {1.0, 0.5, 0.25, 0.125}) {
+        for (int k = 0; k < 3; ++k) nodes_[v][k] = start[k] + step * move[k];
+        const double q = quality(around);
+        if (q > best) best = q, best_point = nodes_[v];
+      }
+      nodes_[v] = best_point;
+      if (best > q0 + 1e-6) return true;
+    }
+    return false;
+  }
+
+  // Drops the dead elements and the nodes no element uses (the others keep their order).
+  void compact() {
+    std::vector<Tet> kept;
+    std::vector<int> index(nodes_.size(), -1);
+    for (std::size_t t = 0; t < tets_.size(); ++t)
+      if (alive_[t]) {
+        kept.push_back(tets_[t]);
+        for (int v : tets_[t]) index[v] = 0;
+      }
+    std::vector<Point3> used;
+    for (std::size_t v = 0; v < nodes_.size(); ++v)
+      if (index[v] == 0) index[v] = static_cast<int>(used.size()), used.push_back(nodes_[v]);
+    for (Tet& t : kept)
+      for (int& v : t) v = index[v];
+    tets_ = std::move(kept);
+    nodes_ = std::move(used);
+  }
+
+ private:
+  std::vector<Point3>& nodes_;
+  std::vector<Tet>& tets_;
+  std::vector<bool> alive_;
+  std::vector<std::vector<int>> star_;
+};
+
+double mesh_min_dihedral(const std::vector<Point3>& nodes, const std::vector<Tet>& tets) {
+  double q = 180;
+  for (const Tet& t : tets) q = std::min(q, min_dihedral_deg(nodes, t));
+  return tets.empty() ? 0 : q;
+}
+
+}  // namespace
+
+double tet_signed_volume(const Point3& a, const Point3& b, const Point3& c, const Point3& d) {
+  return dot(sub(b, a), cross(sub(c, a), sub(d, a))) / 6;
+}
+
+std::array<double, 6> dihedral_angles_deg(const Point3& a, const Point3& b, const Point3& c, const Point3& d) {
+  // Outward unit normals; the dihedral angle at the edge shared by faces f and g is pi minus the
+  // angle between their normals.
+  const Point3 p[4] = {a, b, c, d};
+  Point3 n[4];
+  for (int f = 0; f < 4; ++f) {
+    n[f] = cross(sub(p[kFace[f][1]], p[kFace[f][0]]), sub(p[kFace[f][2]], p[kFace[f][0]]));
+    const double length = norm(n[f]);
+    for (double& x : n[f]) x /= length;
+  }
+  std::array<double, 6> angles{};
+  int k = 0;
+  for (int f = 0; f < 4; ++f)
+    for (int g = f + 1; g < 4; ++g) angles[k++] = 180 - std::acos(std::clamp(dot(n[f], n[g]), -1.0, 1.0)) * 180 / M_PI;
+  return angles;
+}
+
+double min_dihedral_deg(const std::vector<Point3>& nodes, const Tet& t) {
+  const Point3 &a = nodes[t[0]], &b = nodes[t[1]], &c = nodes[t[2]], &d = nodes[t[3]];
+  if (!(tet_signed_volume(a, b, c, d) > 0)) return 0;
+  const auto angles = dihedral_angles_deg(a, b, c, d);
+  return *std::min_element(angles.begin(), angles.end());
+}
+
+std::vector<Triangle> boundary_faces(const std::vector<Tet>& tets) {
+  std::map<Triangle, std::pair<int, Triangle>> faces;  // sorted -> (count, oriented)
+  for (const Tet& t : tets)
+    for (const auto& f : kFace) {
+      const Triangle oriented{t[f[0]], t[f[1]], t[f[2]]};
+      auto& entry = faces[sorted(oriented)];
+      ++entry.first, entry.second = oriented;
+    }
+  std::vector<Triangle> out;
+  for (const auto& [key, entry] : faces)
+    if (entry.first == 1) out.push_back(entry.second);
+  return out;
+}
+
+bool boundary_is_closed_manifold(const std::vector<Tet>& tets) {
+  std::map<Triangle, int> faces;
+  for (const Tet& t : tets)
+    for (const auto& f : kFace)
+      if (++faces[sorted({t[f[0]], t[f[1]], t[f[2]]})] > 2) return false;
+  // Each boundary node's link: the edges opposite it in its boundary faces. Closed and manifold
+  // when every boundary edge has two faces and every link is one cycle.
+  std::map<std::pair<int, int>, int> edges;
+  std::map<int, std::vector<std::pair<int, int>>> links;
+  for (const auto& [f, count] : faces) {
+    if (count != 1) continue;
+    for (int k = 0; k < 3; ++k) {
+      const int a = f[k], b = f[(k + 1) % 3], c = f[(k + 2) % 3];
+      ++edges[{std::min(a, b), std::max(a, b)}];
+      links[a].push_back({b, c});
+    }
+  }
+  for (const auto& [e, count] : edges)
+    if (count != 2) return false;
+  for (auto& [v, link] : links) {
+    // Walk the cycle from the first edge; it must visit every edge of the link.
+    std::size_t visited = 1;
+    int previous = link[0].first, current = link[0].second;
+    while (current != link[0].first && visited <= link.size()) {
+      int next = -1;
+      for (const auto& [x, y] : link)
+        if (x == current && y != previous) next = y;
+        else if (y == current && x != previous) next = x;
+      if (next < 0) return false;
+      previous = current, current = next, ++visited;
+    }
+    if (visited != link.size()) return false;
+  }
+  return true;
+}
+
+SliverRepair repair_slivers(std::vector<Point3>& nodes, std::vector<Tet>& tets, double target_deg) {
+  SliverRepair report;
+  report.min_dihedral_before_deg = mesh_min_dihedral(nodes, tets);
+  for (int pass = 0; pass < 20; ++pass) {
+    RepairMesh mesh(nodes, tets);
+    std::vector<std::pair<double, int>> bad;
+    for (int t = 0; t < static_cast<int>(tets.size()); ++t)
+      if (const double q = mesh.quality(t); q < target_deg) bad.push_back({q, t});
+    if (bad.empty()) break;
+    std::sort(bad.begin(), bad.end());
+    bool changed = false;
+    for (const auto& [q, t] : bad) {
+      if (!mesh.alive(t) || mesh.quality(t) >= target_deg) continue;
+      // Flips first (they keep the boundary), then moving a node, then peeling (which cuts a
+      // little off the tissue).
+      if (mesh.flip32(t, &report.flips32) || mesh.flip23(t, &report.flips23)) {
+        changed = true;
+      } else if (mesh.relocate(t)) {
+        ++report.relocated, changed = true;
+      } else if (mesh.peel(t, &report.peeled_volume)) {
+        ++report.peeled, changed = true;
+      }
+    }
+    mesh.compact();
+    if (!changed) break;
+  }
+  report.min_dihedral_after_deg = mesh_min_dihedral(nodes, tets);
+  return report;
+}
+
+}  // namespace fetouch::meshes

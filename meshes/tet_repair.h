@@ -1,0 +1,50 @@
+// Tetrahedral mesh geometry and sliver repair, independent of any mesher.
+//
+// A mesher that must keep a given surface (Gmsh inside a segmented surface) leaves slivers where
+// it may not move the surface's nodes: flat tetrahedra whose four nodes lie nearly in a plane.
+// repair_slivers removes them by local operations that each keep the mesh valid (every element
+// positively oriented, the boundary closed and manifold) and that are applied only when they raise
+// the worst dihedral angle of the elements they touch:
+//   - peeling: a sliver with two or three faces on the boundary is cut away (the boundary then
+//     runs along its other faces; the volume lost is the sliver's, which is nearly nothing);
+//   - flips: 2-3 (two elements sharing an interior face become three around a new edge) and 3-2
+//     (three elements around an interior edge become two);
+//   - relocation: an interior node of a sliver moves towards where its elements would be
+//     regular, if the worst angle around it improves.
+#pragma once
+
+#include <array>
+#include <vector>
+
+namespace fetouch::meshes {
+
+using Point3 = std::array<double, 3>;
+using Tet = std::array<int, 4>;
+using Triangle = std::array<int, 3>;
+
+double tet_signed_volume(const Point3& a, const Point3& b, const Point3& c, const Point3& d);
+
+// The six dihedral angles (degrees) of a positively oriented tetrahedron.
+std::array<double, 6> dihedral_angles_deg(const Point3& a, const Point3& b, const Point3& c, const Point3& d);
+
+// The smallest dihedral angle, or 0 for an element that is not positively oriented.
+double min_dihedral_deg(const std::vector<Point3>& nodes, const Tet& t);
+
+// The faces that belong to exactly one element, oriented outwards.
+std::vector<Triangle> boundary_faces(const std::vector<Tet>& tets);
+
+// True when every face belongs to one or two elements and the boundary faces form a closed
+// 2-manifold: each boundary edge in exactly two boundary faces, each boundary node's faces one fan.
+bool boundary_is_closed_manifold(const std::vector<Tet>& tets);
+
+struct SliverRepair {
+  int peeled = 0, flips23 = 0, flips32 = 0, relocated = 0;
+  double peeled_volume = 0;  // the volume cut away by peeling
+  double min_dihedral_before_deg = 0, min_dihedral_after_deg = 0;
+};
+
+// Improves every element whose smallest dihedral angle is under `target_deg`, as far as the
+// operations above allow; nodes no element uses any more are removed (indices renumbered).
+SliverRepair repair_slivers(std::vector<Point3>& nodes, std::vector<Tet>& tets, double target_deg);
+
+}  // namespace fetouch::meshes

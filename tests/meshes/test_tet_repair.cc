@@ -1,0 +1,225 @@
+// Tetrahedral geometry and sliver repair against closed forms: a regular and a corner
+// tetrahedron's dihedral angles, a unit cube's boundary (divergence theorem), pinched meshes, and
+// each repair operation on a configuration whose answer is known.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <set>
+
+#include "meshes/tet_repair.h"
+
+namespace fetouch::meshes {
+namespace {
+
+double total_volume(const std::vector<Point3>& nodes, const std::vector<Tet>& tets) {
+  double v = 0;
+  for (const Tet& t : tets) v += tet_signed_volume(nodes[t[0]], nodes[t[1]], nodes[t[2]], nodes[t[3]]);
+  return v;
+}
+
+double worst(const std::vector<Point3>& nodes, const std::vector<Tet>& tets) {
+  double q = 180;
+  for (const Tet& t : tets) q = std::min(q, min_dihedral_deg(nodes, t));
+  return q;
+}
+
+// A row of `cubes` unit cubes along x, each as six tetrahedra around its diagonal (Kuhn's split);
+// node (i, j, k) is i + (cubes + 1) (j + 2 k).
+void cube_row(int cubes, std::vector<Point3>& nodes, std::vector<Tet>& tets) {
+  nodes.clear(), tets.clear();
+  const auto id = [cubes](int i, int j, int k) { return i + (cubes + 1) * (j + 2 * k); };
+  for (int k = 0; k < 2; ++k)
+    for (int j = 0; j < 2; ++j)
+      for (int i = 0; i <= cubes; ++i) nodes.push_back({double(i), double(j), double(k)});
+  const int paths[6][3] = {{0, 1, 2}, {0, 2, 1}, {1, 0, 2}, {1, 2, 0}, {2, 0, 1}, {2, 1, 0}};
+  for (int c = 0; c < cubes; ++c)
+    for (const auto& path : paths) {
+      int x[3] = {c, 0, 0};
+      Tet t;
+      t[0] = id(c, 0, 0);
+      for (int s = 0; s < 3; ++s) {
+        ++x[path[s]];
+        t[s + 1] = id(x[0], x[1], x[2]);
+      }
+      if (tet_signed_volume(nodes[t[0]], nodes[t[1]], nodes[t[2]], nodes[t[3]]) < 0) std::swap(t[2], t[3]);
+      tets.push_back(t);
+    }
+}
+
+void unit_cube(std::vector<Point3>& nodes, std::vector<Tet>& tets) { cube_row(1, nodes, tets); }
+
+void orient(const std::vector<Point3>& nodes, std::vector<Tet>& tets) {
+  for (Tet& t : tets)
+    if (tet_signed_volume(nodes[t[0]], nodes[t[1]], nodes[t[2]], nodes[t[3]]) < 0) std::swap(t[2], t[3]);
+}
+
+TEST(TetGeometry, DihedralAnglesOfKnownTetrahedra) {
+  const double regular = std::acos(1.0 / 3) * 180 / M_PI;  // 70.53 degrees
+  const auto a = dihedral_angles_deg({1, 1, 1}, {1, -1, -1}, {-1, 1, -1}, {-1, -1, 1});
+  for (double angle : a) EXPECT_NEAR(angle, regular, 1e-9);
+  // The corner of a cube: right angles at the three edges from the corner, acos(1/sqrt 3) at the
+  // edges of the far face.
+  auto c = dihedral_angles_deg({0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1});
+  std::sort(c.begin(), c.end());
+  for (int k = 0; k < 3; ++k) EXPECT_NEAR(c[k], std::acos(1 / std::sqrt(3.0)) * 180 / M_PI, 1e-9);
+  for (int k = 3; k < 6; ++k) EXPECT_NEAR(c[k], 90, 1e-9);
+  // An inverted element has no quality.
+  EXPECT_EQ(min_dihedral_deg({{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}}, {0, 2, 1, 3}), 0);
+}
+
+TEST(TetGeometry, CubeBoundaryIsClosedOutwardAndEnclosesItsVolume) {
+  std::vector<Point3> nodes;
+  std::vector<Tet> tets;
+  unit_cube(nodes, tets);
+  EXPECT_NEAR(total_volume(nodes, tets), 1, 1e-14);
+  const auto faces = boundary_faces(tets);
+  ASSERT_EQ(faces.size(), 12u);
+  // Divergence theorem with F = x / 3: the volume is the sum over faces of (centroid . n) area / 3,
+  // positive only if every face points out.
+  double flux = 0;
+  for (const Triangle& f : faces) {
+    const Point3 &p = nodes[f[0]], &q = nodes[f[1]], &r = nodes[f[2]];
+    const Point3 u{q[0] - p[0], q[1] - p[1], q[2] - p[2]}, v{r[0] - p[0], r[1] - p[1], r[2] - p[2]};
+    const Point3 n{u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]};  // 2 area n
+    for (int k = 0; k < 3; ++k) flux += (p[k] + q[k] + r[k]) / 3 * n[k] / 2 / 3;
+  }
+  EXPECT_NEAR(flux, 1, 1e-14);
+  EXPECT_TRUE(boundary_is_closed_manifold(tets));
+}
+
+TEST(TetGeometry, PinchedMeshesAreNotManifold) {
+  // Two tetrahedra touching at one node: each boundary edge has two faces, but the node's faces
+  // make two fans.
+  const std::vector<Tet> at_a_node{{0, 1, 2, 3}, {0, 4, 5, 6}};
+  EXPECT_FALSE(boundary_is_closed_manifold(at_a_node));
+  // Touching along an edge: four boundary faces on that edge.
+  const std::vector<Tet> at_an_edge{{0, 1, 2, 3}, {0, 1, 4, 5}};
+  EXPECT_FALSE(boundary_is_closed_manifold(at_an_edge));
+  // A face held by three elements.
+  const std::vector<Tet> three_on_a_face{{0, 1, 2, 3}, {0, 2, 1, 4}, {0, 1, 2, 5}};
+  EXPECT_FALSE(boundary_is_closed_manifold(three_on_a_face));
+  EXPECT_TRUE(boundary_is_closed_manifold({{0, 1, 2, 3}}));
+}
+
+TEST(SliverRepair, FlipsAwayASliverOnTheSurface) {
+  // The cube's top corners (1,0,1) and (0,1,1) raised by eps, and a sliver filling the fold
+  // between the top's two diagonals: with the two elements under it, three around the top
+  // diagonal, which a 3-2 flip makes two, keeping the boundary and the volume.
+  std::vector<Point3> nodes;
+  std::vector<Tet> tets;
+  unit_cube(nodes, tets);
+  const double eps = 0.02;
+  nodes[5][2] += eps, nodes[6][2] += eps;  // (1,0,1), (0,1,1)
+  tets.push_back({4, 5, 7, 6});
+  orient(nodes, tets);
+  ASSERT_TRUE(boundary_is_closed_manifold(tets));
+  const double volume = total_volume(nodes, tets);
+  ASSERT_LT(worst(nodes, tets), 5);
+
+  const SliverRepair r = repair_slivers(nodes, tets, 10);
+  EXPECT_EQ(r.flips32, 1);
+  EXPECT_EQ(r.peeled, 0);
+  EXPECT_EQ(tets.size(), 6u);
+  EXPECT_TRUE(boundary_is_closed_manifold(tets));
+  EXPECT_NEAR(total_volume(nodes, tets), volume, 1e-14);
+  EXPECT_GT(r.min_dihedral_after_deg, 10);
+  EXPECT_DOUBLE_EQ(r.min_dihedral_after_deg, worst(nodes, tets));
+}
+
+TEST(SliverRepair, PeelsASliverThatNoFlipRemoves) {
+  // Two cubes side by side, the edge their tops share lowered by eps into a valley, and a sliver
+  // filling the valley from corner (0,0,1) to corner (2,1,1). Five elements around the valley's
+  // edge (no 3-2 flip), no 2-3 flip valid, every node on a corner or an edge of the box (none
+  // moves): it is peeled, its volume eps / 3 with it.
+  std::vector<Point3> nodes;
+  std::vector<Tet> tets;
+  cube_row(2, nodes, tets);
+  const auto id = [](int i, int j, int k) { return i + 3 * (j + 2 * k); };
+  const double eps = 0.02;
+  nodes[id(1, 0, 1)][2] -= eps, nodes[id(1, 1, 1)][2] -= eps;
+  tets.push_back({id(0, 0, 1), id(1, 0, 1), id(1, 1, 1), id(2, 1, 1)});
+  orient(nodes, tets);
+  ASSERT_TRUE(boundary_is_closed_manifold(tets));
+  const double volume = total_volume(nodes, tets);
+  ASSERT_LT(worst(nodes, tets), 5);
+
+  const SliverRepair r = repair_slivers(nodes, tets, 10);
+  EXPECT_EQ(r.peeled, 1);
+  EXPECT_EQ(r.flips23 + r.flips32 + r.relocated, 0);
+  EXPECT_NEAR(r.peeled_volume, eps / 3, 1e-14);
+  EXPECT_EQ(tets.size(), 12u);
+  EXPECT_TRUE(boundary_is_closed_manifold(tets));
+  EXPECT_NEAR(total_volume(nodes, tets), volume - eps / 3, 1e-14);
+  EXPECT_GT(r.min_dihedral_after_deg, 10);
+}
+
+// A bipyramid: the triangle (c, d, e) on the unit circle in z = 0 and apexes a, b at z = +-h.
+std::vector<Point3> bipyramid(double h) {
+  std::vector<Point3> nodes{{0, 0, h}, {0, 0, -h}};
+  for (int k = 0; k < 3; ++k) nodes.push_back({std::cos(2 * M_PI * k / 3), std::sin(2 * M_PI * k / 3), 0});
+  return nodes;
+}
+
+std::set<Triangle> sorted_faces(const std::vector<Tet>& tets) {
+  std::set<Triangle> out;
+  for (Triangle f : boundary_faces(tets)) {
+    std::sort(f.begin(), f.end());
+    out.insert(f);
+  }
+  return out;
+}
+
+TEST(SliverRepair, FlatPairBecomesThreeAroundTheAxis) {
+  // Low and wide (h = 0.15): two flat elements on the triangle; three around the axis a-b are
+  // better. The bipyramid's volume is 2/3 h times the triangle's area 3 sqrt(3) / 4.
+  std::vector<Point3> nodes = bipyramid(0.15);
+  std::vector<Tet> tets{{2, 3, 4, 0}, {2, 3, 4, 1}};
+  orient(nodes, tets);
+  const auto faces = sorted_faces(tets);
+  const double before = worst(nodes, tets);
+  const SliverRepair r = repair_slivers(nodes, tets, before + 1);
+  EXPECT_EQ(r.flips23, 1);
+  ASSERT_EQ(tets.size(), 3u);
+  for (const Tet& t : tets) EXPECT_TRUE(std::count(t.begin(), t.end(), 0) && std::count(t.begin(), t.end(), 1));
+  EXPECT_NEAR(total_volume(nodes, tets), 2.0 / 3 * 0.15 * 3 * std::sqrt(3.0) / 4, 1e-14);
+  EXPECT_EQ(sorted_faces(tets), faces);  // the boundary is unchanged
+  EXPECT_GT(worst(nodes, tets), before);
+}
+
+TEST(SliverRepair, NeedlesAroundALongAxisBecomeTwo) {
+  // Tall (h = 2): three needles around the axis; two elements on the triangle are better.
+  std::vector<Point3> nodes = bipyramid(2);
+  std::vector<Tet> tets{{0, 1, 2, 3}, {0, 1, 3, 4}, {0, 1, 4, 2}};
+  orient(nodes, tets);
+  const auto faces = sorted_faces(tets);
+  const double before = worst(nodes, tets);
+  const SliverRepair r = repair_slivers(nodes, tets, before + 1);
+  EXPECT_EQ(r.flips32, 1);
+  ASSERT_EQ(tets.size(), 2u);
+  EXPECT_NEAR(total_volume(nodes, tets), 2.0 / 3 * 2 * 3 * std::sqrt(3.0) / 4, 1e-13);
+  EXPECT_EQ(sorted_faces(tets), faces);
+  EXPECT_GT(worst(nodes, tets), before);
+}
+
+TEST(SliverRepair, MovesAnInteriorNodeBackTowardsTheCentre) {
+  // The octahedron |x| + |y| + |z| <= 1 as eight corner elements around its centre; the centre
+  // pushed next to a face makes slivers there. At the centre every element is a cube corner
+  // (smallest angle acos(1/sqrt 3) = 54.7 degrees).
+  std::vector<Point3> nodes{{0.3, 0.3, 0.35}, {1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}};
+  std::vector<Tet> tets;
+  for (int x : {1, 2})
+    for (int y : {3, 4})
+      for (int z : {5, 6}) tets.push_back({0, x, y, z});
+  orient(nodes, tets);
+  ASSERT_LT(worst(nodes, tets), 10);
+  const SliverRepair r = repair_slivers(nodes, tets, 50);
+  EXPECT_GT(r.relocated, 0);
+  EXPECT_EQ(tets.size(), 8u);
+  EXPECT_NEAR(total_volume(nodes, tets), 4.0 / 3, 1e-14);
+  EXPECT_GT(worst(nodes, tets), 45);
+  for (int k = 1; k < 7; ++k) EXPECT_EQ(std::abs(nodes[k][0]) + std::abs(nodes[k][1]) + std::abs(nodes[k][2]), 1);
+}
+
+}  // namespace
+}  // namespace fetouch::meshes
