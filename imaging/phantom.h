@@ -26,12 +26,19 @@ struct Volume {
   std::array<int, 3> dimensions{0, 0, 0};
   std::array<double, 3> spacing_mm{1, 1, 1};
   std::array<double, 3> origin_mm{0, 0, 0};  // centre of voxel (0, 0, 0)
+  // Direction cosines, row-major: column c is the direction of index axis c in space.
+  std::array<double, 9> direction{1, 0, 0, 0, 1, 0, 0, 0, 1};
   std::vector<T> data;
   std::size_t index(int i, int j, int k) const {
     return (std::size_t(k) * dimensions[1] + j) * dimensions[0] + i;
   }
+  // origin + direction (i, j, k) x spacing
   std::array<double, 3> position_mm(int i, int j, int k) const {
-    return {origin_mm[0] + i * spacing_mm[0], origin_mm[1] + j * spacing_mm[1], origin_mm[2] + k * spacing_mm[2]};
+    const double step[3] = {i * spacing_mm[0], j * spacing_mm[1], k * spacing_mm[2]};
+    std::array<double, 3> p = origin_mm;
+    for (int r = 0; r < 3; ++r)
+      for (int c = 0; c < 3; ++c) p[r] += direction[3 * r + c] * step[c];
+    return p;
   }
   double voxel_volume_mm3() const { return spacing_mm[0] * spacing_mm[1] * spacing_mm[2]; }
 };

@@ -14,7 +14,7 @@ namespace {
 template <class T, class U>
 Volume<T> like(const Volume<U>& v) {
   Volume<T> out;
-  out.dimensions = v.dimensions, out.spacing_mm = v.spacing_mm, out.origin_mm = v.origin_mm;
+  out.dimensions = v.dimensions, out.spacing_mm = v.spacing_mm, out.origin_mm = v.origin_mm, out.direction = v.direction;
   out.data.assign(v.data.size(), T{});
   return out;
 }

@@ -360,6 +360,24 @@ VolumeMesh mesh_mask(const MaskVolume& mask, const MeshingSettings& s) {
     // parametrise the spine's surface, and the folds make slivers).
     surface = smoothed(decimate->GetOutput(), 10);
   }
+  // Into space: the image's index axes along its direction cosines, about its origin.
+  if (mask.direction != std::array<double, 9>{1, 0, 0, 0, 1, 0, 0, 0, 1}) {
+    auto points = vtkSmartPointer<vtkPoints>::New();
+    points->SetDataTypeToDouble();
+    for (vtkIdType i = 0; i < surface->GetNumberOfPoints(); ++i) {
+      double p[3], q[3];
+      surface->GetPoint(i, p);
+      for (int r = 0; r < 3; ++r) {
+        q[r] = mask.origin_mm[r];
+        for (int c = 0; c < 3; ++c) q[r] += mask.direction[3 * r + c] * (p[c] - mask.origin_mm[c]);
+      }
+      points->InsertNextPoint(q);
+    }
+    auto placed = vtkSmartPointer<vtkPolyData>::New();
+    placed->DeepCopy(surface);
+    placed->SetPoints(points);
+    surface = placed;
+  }
   return fill_surface(surface, s, out);
 }
 

@@ -27,6 +27,7 @@ struct MaskVolume {
   std::array<int, 3> dimensions{0, 0, 0};
   std::array<double, 3> spacing_mm{1, 1, 1};
   std::array<double, 3> origin_mm{0, 0, 0};
+  std::array<double, 9> direction{1, 0, 0, 0, 1, 0, 0, 0, 1};  // row-major; column c: index axis c
   std::vector<std::uint8_t> data;  // 0/1, x fastest
 };
 

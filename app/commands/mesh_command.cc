@@ -68,7 +68,8 @@ int run_mesh(const MeshOptions& o) {
     const imaging::Volume<float> volume = imaging::read_volume(o.volume);
     log::info() << "segmenting";
     const imaging::Mask m = segment(volume, o);
-    mask.dimensions = m.dimensions, mask.spacing_mm = m.spacing_mm, mask.origin_mm = m.origin_mm, mask.data = m.data;
+    mask.dimensions = m.dimensions, mask.spacing_mm = m.spacing_mm, mask.origin_mm = m.origin_mm;
+    mask.direction = m.direction, mask.data = m.data;
   } catch (const std::exception& e) {
     std::cerr << "error: " << e.what() << "\n";
     return kExitBadInput;

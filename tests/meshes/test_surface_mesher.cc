@@ -3,6 +3,7 @@
 // with the reason.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <map>
 #include <stdexcept>
@@ -100,6 +101,43 @@ TEST(SurfaceMesher, NonManifoldAndEmptySurfacesAreRefused) {
   EXPECT_THROW(mesh_triangle_surface(nodes, {{0, 1, 7}}, s), std::runtime_error);
   s.element_size_mm = 0.001;  // 10 mm tetrahedra in 1 um elements: far beyond the memory
   EXPECT_THROW(mesh_triangle_surface(nodes, {{0, 2, 1}, {0, 1, 3}, {0, 3, 2}, {1, 2, 3}}, s), std::runtime_error);
+}
+
+}  // namespace
+}  // namespace fetouch::meshes
+
+namespace fetouch::meshes {
+namespace {
+
+TEST(MaskMesher, DirectionCosinesPlaceTheMeshInSpace) {
+  // A 30 x 10 x 10 mm block of voxels whose index axis 0 points along y and axis 1 along -x
+  // (a quarter turn about z): the mesh must be long in y, and lie on the side the turn says.
+  MaskVolume mask;
+  mask.dimensions = {40, 20, 20};
+  mask.spacing_mm = {1, 1, 1};
+  mask.origin_mm = {100, 0, 0};
+  mask.direction = {0, -1, 0, 1, 0, 0, 0, 0, 1};
+  mask.data.assign(40 * 20 * 20, 0);
+  for (int k = 5; k < 15; ++k)
+    for (int j = 5; j < 15; ++j)
+      for (int i = 5; i < 35; ++i) mask.data[(std::size_t(k) * 20 + j) * 40 + i] = 1;
+  MeshingSettings s;
+  s.element_size_mm = 3;
+  const VolumeMesh m = mesh_mask(mask, s);
+  Point3 lo{1e9, 1e9, 1e9}, hi{-1e9, -1e9, -1e9};
+  for (const auto& p : m.nodes_m)
+    for (int d = 0; d < 3; ++d) lo[d] = std::min(lo[d], p[d] * 1e3), hi[d] = std::max(hi[d], p[d] * 1e3);
+  // Voxels i = 5..34 span y from 4.5 to 34.5 mm (the surface passes half a voxel out); j = 5..14
+  // spans x from 100 - 14.5 to 100 - 4.5. The smoothing rounds the block's edges and lets its
+  // faces bulge by about a voxel: 1.5 mm of tolerance (unturned, the block would span 30 mm in x).
+  EXPECT_NEAR(lo[1], 4.5, 1.5);
+  EXPECT_NEAR(hi[1], 34.5, 1.5);
+  EXPECT_NEAR(lo[0], 85.5, 1.5);
+  EXPECT_NEAR(hi[0], 95.5, 1.5);
+  EXPECT_NEAR(lo[2], 4.5, 1.5);
+  EXPECT_NEAR(hi[2], 14.5, 1.5);
+  EXPECT_TRUE(m.closed_manifold);
+  EXPECT_EQ(m.quality.inverted, 0);
 }
 
 }  // namespace
