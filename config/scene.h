@@ -26,15 +26,22 @@ struct SourceLocation {
 enum class MeshSource { file, volume, generated };
 enum class ElementType { p1, p2, q1, q2 };  // P: tetrahedra (simplex), Q: hexahedra
 enum class GeneratedShape { box, ball, shell };
-enum class SmoothingFilter { none, gaussian, median, anisotropic_diffusion };
+enum class SmoothingFilter { none, gaussian, median };
 
-// Options for turning an ultrasound volume into a mesh (imaging + meshes pipeline).
+// Options for turning an ultrasound volume into a mesh (imaging + meshes pipeline, the same as
+// `fetouch mesh`): one of three segmentations (labels of a label map, the fetal pipeline, or
+// smoothing + threshold + largest region + closing + hole filling), then meshing.
 struct MeshingOptions {
   double target_size_m = 4e-3;
-  std::optional<double> threshold;  // intensity; absent: chosen automatically (Otsu)
-  std::optional<int> label;         // for a label map: the label to mesh
+  std::vector<int> labels;          // a label map: these labels are the tissue
+  bool fetus = false;               // the fetal segmentation pipeline
+  std::optional<double> threshold;  // intensity; absent: halfway between the 5th and 95th percentiles
   SmoothingFilter smoothing = SmoothingFilter::gaussian;
-  double smoothing_sigma_m = 1e-3;
+  double smoothing_sigma_m = 1e-3;  // gaussian only
+  int closing_voxels = 2;
+  // Finer elements near a point (absent: none).
+  std::optional<Vec3> refine_center_m;
+  double refine_radius_m = 0, refine_size_m = 0;
 };
 
 // A mesh generated from a primitive. Boundary faces of a box are named xmin, xmax, ymin, ymax, zmin,

@@ -30,8 +30,7 @@ const Choices<GeneratedShape> kShapes{{"box", GeneratedShape::box},
                                       {"shell", GeneratedShape::shell}};
 const Choices<SmoothingFilter> kFilters{{"none", SmoothingFilter::none},
                                         {"gaussian", SmoothingFilter::gaussian},
-                                        {"median", SmoothingFilter::median},
-                                        {"anisotropic_diffusion", SmoothingFilter::anisotropic_diffusion}};
+                                        {"median", SmoothingFilter::median}};
 const Choices<MaterialModel> kModels{
     {"linear_elastic", MaterialModel::linear_elastic},
     {"saint_venant_kirchhoff", MaterialModel::saint_venant_kirchhoff},
@@ -131,24 +130,51 @@ void read_generated(MapView& parent, GeneratedMesh& out) {
 void read_meshing(MapView& parent, MeshingOptions& out) {
   const Entry e = parent.entry("meshing");
   MapView map(parent.reader(), e.value, e.path, e.key_mark,
-              {"target_size_m", "threshold", "label", "smoothing", "smoothing_sigma_m"});
+              {"target_size_m", "labels", "fetus", "threshold", "smoothing", "smoothing_sigma_m", "closing_voxels",
+               "refine"});
   if (!map.valid()) return;
   map.number("target_size_m", out.target_size_m, Range::positive());
   if (map.has("threshold")) {
     double threshold = 0;
     if (map.number("threshold", threshold, Range::any())) out.threshold = threshold;
   }
-  if (map.has("label")) {
-    int label = 0;
-    if (map.integer("label", label, {0, 65535})) out.label = label;
+  if (map.has("labels")) {
+    const Entry labels = map.entry("labels");
+    if (!labels.value.IsSequence() || labels.value.size() == 0) {
+      map.reader().error(labels.value_mark, labels.path,
+                         "expected a list of labels such as [3, 4, 5, 6], found " + detail::describe_node(labels.value));
+    } else {
+      for (std::size_t i = 0; i < labels.value.size(); ++i) {
+        Entry item = labels;
+        item.value.reset(labels.value[i]);
+        item.value_mark = labels.value[i].Mark();
+        item.path = labels.path + "[" + std::to_string(i) + "]";
+        const auto x = detail::read_number(map.reader(), item);
+        if (!x) continue;
+        if (*x != std::floor(*x) || *x < 0 || *x > 65535)
+          map.reader().error(item.value_mark, item.path, "a label is a whole number from 0 to 65535, not " + std::to_string(*x));
+        else
+          out.labels.push_back(static_cast<int>(*x));
+      }
+    }
   }
-  if (out.threshold && out.label) {
-    const Entry label = map.entry("label");
-    map.reader().error(label.key_mark, label.path,
-                       "give either threshold (an intensity volume) or label (a label map), not both");
-  }
+  map.boolean("fetus", out.fetus);
+  const int ways = !out.labels.empty() + out.fetus + out.threshold.has_value();
+  if (ways > 1)
+    map.reader().error(e.key_mark, e.path,
+                       "give one of labels (a label map), fetus (a fetal volume) or threshold (an intensity volume)");
   map.choice("smoothing", out.smoothing, kFilters);
   map.number("smoothing_sigma_m", out.smoothing_sigma_m, Range::positive());
+  map.integer("closing_voxels", out.closing_voxels, {0, 10});
+  if (map.has("refine")) {
+    const Entry r = map.entry("refine");
+    MapView refine(map.reader(), r.value, r.path, r.key_mark, {"center_m", "radius_m", "size_m"});
+    Vec3 center{};
+    if (refine.valid() && refine.vec3("center_m", center, Need::required) &&
+        refine.number("radius_m", out.refine_radius_m, Range::positive(), Need::required) &&
+        refine.number("size_m", out.refine_size_m, Range::positive(), Need::required))
+      out.refine_center_m = center;
+  }
 }
 
 void read_mesh(MapView& scene, MeshSpec& out) {

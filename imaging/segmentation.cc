@@ -193,6 +193,24 @@ Mask segment_fetus(const Volume<float>& image, const FetusSegmentation& s) {
   return fill_holes(close(connected_component(high, ComponentChoice::largest_interior), s.closing_radius));
 }
 
+Mask segment_tissue(const Volume<float>& v, const TissueSegmentation& s) {
+  if (!s.labels.empty()) return fill_holes(connected_component(select_labels(v, s.labels), ComponentChoice::largest));
+  if (s.fetus) return segment_fetus(v, FetusSegmentation{});
+  const Volume<float> smooth = s.smoothing == TissueSegmentation::Smoothing::gaussian ? gaussian_smooth(v, s.smoothing_mm)
+                               : s.smoothing == TissueSegmentation::Smoothing::median ? median3(v)
+                                                                                      : v;
+  float t = 0;
+  if (s.threshold) {
+    t = *s.threshold;
+  } else {
+    std::vector<float> sorted = smooth.data;
+    std::sort(sorted.begin(), sorted.end());
+    t = 0.5f * (sorted[sorted.size() / 20] + sorted[sorted.size() * 19 / 20]);
+  }
+  const Mask region = connected_component(threshold(smooth, t, 1e30f), ComponentChoice::largest);
+  return fill_holes(close(region, s.closing));
+}
+
 double dice(const Mask& a, const Mask& b) {
   if (a.dimensions != b.dimensions) throw std::invalid_argument("dice: the masks differ in size");
   std::size_t both = 0, na = 0, nb = 0;

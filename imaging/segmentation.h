@@ -12,6 +12,7 @@
 
 #include <array>
 #include <cstdint>
+#include <optional>
 #include <vector>
 
 #include "imaging/phantom.h"
@@ -45,6 +46,23 @@ struct FetusSegmentation {
   int closing_radius = 2;
 };
 Mask segment_fetus(const Volume<float>& image, const FetusSegmentation& settings);
+
+// How a volume becomes the tissue mask that is meshed (`fetouch mesh`, a scene's mesh.volume):
+//   - labels: the voxels of these labels of a label map, the largest piece, holes filled;
+//   - fetus: segment_fetus above;
+//   - otherwise: smoothing (Gaussian of smoothing_mm, or the 3 x 3 x 3 median, or none), a
+//     threshold (default: halfway between the 5th and 95th percentiles of the smoothed volume),
+//     the largest connected region, closing by `closing` voxels and hole filling.
+// Throws std::runtime_error for an empty segmentation.
+struct TissueSegmentation {
+  std::vector<int> labels;
+  bool fetus = false;
+  std::optional<float> threshold;
+  enum class Smoothing { none, gaussian, median } smoothing = Smoothing::gaussian;
+  double smoothing_mm = 1.0;
+  int closing = 2;
+};
+Mask segment_tissue(const Volume<float>& volume, const TissueSegmentation& settings);
 
 // Dice coefficient 2|A n B| / (|A| + |B|) of two masks of the same dimensions.
 double dice(const Mask& a, const Mask& b);

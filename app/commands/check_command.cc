@@ -105,13 +105,6 @@ void check_referenced_data(SceneReport& report) {
     if (mesh.source == config::MeshSource::file) {
       log::detail() << "reading " << mesh.path.string();
       report.mesh_file = meshes::read_mesh_summary(mesh.path);
-      if (mesh.path.extension() != ".msh") {
-        // The solver's reader is Gmsh; a .vtu is summarised and its groups cannot be named.
-        report.warnings.push_back(diagnostic_at(
-            report.file, mesh.where, "mesh.file",
-            "the solver reads Gmsh .msh meshes; this .vtu was summarised but not built in deal.II"));
-        return;
-      }
     }
     log::detail() << "building the mesh in deal.II";
     report.tissue = fem::inspect_tissue_mesh(mesh);

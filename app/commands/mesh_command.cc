@@ -30,6 +30,7 @@ struct MeshOptions {
   std::vector<int> labels;        // label map: these labels are the tissue
   bool fetus = false;             // the fetal segmentation pipeline
   float threshold = -1;           // intensity threshold (default: halfway between the 5th and 95th percentiles)
+  std::string smoothing = "gaussian";
   double smoothing_mm = 1.0;
   int closing = 2;
   double size_mm = 3;
@@ -37,22 +38,6 @@ struct MeshOptions {
   std::vector<double> refine;     // X Y Z RADIUS SIZE, mm
   bool json = false;
 };
-
-imaging::Mask segment(const imaging::Volume<float>& v, const MeshOptions& o) {
-  if (!o.labels.empty())
-    return imaging::fill_holes(
-        imaging::connected_component(imaging::select_labels(v, o.labels), imaging::ComponentChoice::largest));
-  if (o.fetus) return imaging::segment_fetus(v, imaging::FetusSegmentation{});
-  const imaging::Volume<float> smooth = imaging::gaussian_smooth(v, o.smoothing_mm);
-  float t = o.threshold;
-  if (t < 0) {
-    std::vector<float> sorted = smooth.data;
-    std::sort(sorted.begin(), sorted.end());
-    t = 0.5f * (sorted[sorted.size() / 20] + sorted[sorted.size() * 19 / 20]);
-  }
-  const auto region = imaging::connected_component(imaging::threshold(smooth, t, 1e30f), imaging::ComponentChoice::largest);
-  return imaging::fill_holes(imaging::close(region, o.closing));
-}
 
 int run_mesh(const MeshOptions& o) {
   const auto start = std::chrono::steady_clock::now();
@@ -67,7 +52,13 @@ int run_mesh(const MeshOptions& o) {
     log::info() << "reading " << o.volume;
     const imaging::Volume<float> volume = imaging::read_volume(o.volume);
     log::info() << "segmenting";
-    const imaging::Mask m = segment(volume, o);
+    imaging::TissueSegmentation segmentation;
+    segmentation.labels = o.labels, segmentation.fetus = o.fetus, segmentation.smoothing_mm = o.smoothing_mm;
+    segmentation.closing = o.closing;
+    if (o.threshold >= 0) segmentation.threshold = o.threshold;
+    if (o.smoothing == "none") segmentation.smoothing = imaging::TissueSegmentation::Smoothing::none;
+    if (o.smoothing == "median") segmentation.smoothing = imaging::TissueSegmentation::Smoothing::median;
+    const imaging::Mask m = imaging::segment_tissue(volume, segmentation);
     mask.dimensions = m.dimensions, mask.spacing_mm = m.spacing_mm, mask.origin_mm = m.origin_mm;
     mask.direction = m.direction, mask.data = m.data;
   } catch (const std::exception& e) {
@@ -183,6 +174,9 @@ void add_mesh_command(CLI::App& parent, int& exit_code) {
   cmd->add_option("--labels", o->labels, "The labels that make the tissue (label maps)");
   cmd->add_flag("--fetus", o->fetus, "Segment the fetus of a fetal ultrasound volume");
   cmd->add_option("--threshold", o->threshold, "Intensity threshold (default: between the 5th and 95th percentiles)");
+  cmd->add_option("--smoothing", o->smoothing, "Speckle filter before the threshold: none, gaussian or median (3x3x3)")
+      ->check(CLI::IsMember({"none", "gaussian", "median"}))
+      ->capture_default_str();
   cmd->add_option("--smooth", o->smoothing_mm, "Gaussian smoothing before the threshold, mm")->capture_default_str();
   cmd->add_option("--close", o->closing, "Closing radius, voxels")->check(CLI::Range(0, 10))->capture_default_str();
   cmd->add_option("--size", o->size_mm, "Target element size, mm")->check(CLI::PositiveNumber)->capture_default_str();

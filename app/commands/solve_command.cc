@@ -19,6 +19,7 @@
 #include "app/exit_codes.h"
 #include "app/json_writer.h"
 #include "app/log.h"
+#include "app/scene_mesh.h"
 #include "app/mpi_session.h"
 #include "app/progress.h"
 #include "config/scene_loader.h"
@@ -161,6 +162,7 @@ int run_solve(const SolveOptions& o) {
   std::unique_ptr<fem::TissueModel> model;
   std::vector<int> patches;
   try {
+    scene.mesh = mesh_scene_volume(scene.mesh);  // a volume is meshed (once, cached) first
     log::info() << "building the tissue model of " << scene.name;
     model = fem::build_tissue_model(scene);
     const double radius = o.radius_m > 0 ? o.radius_m : scene.probes.empty() ? 5e-3 : scene.probes.front().radius_m;

@@ -22,6 +22,7 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <fstream>
 
 #include "config/scene.h"
 #include "fem/mpi_session.h"
@@ -175,6 +176,48 @@ TEST(MeshCommand, EmptySegmentationAndHugeMeshesAreRefused) {
                                         " --labels 2 --size 0.01 --out " + (dir / "x.msh").string()));
   EXPECT_EQ(huge.exit_code, 2);
   EXPECT_NE(huge.err.find("memory"), std::string::npos) << huge.err;
+  fs::remove_all(dir);
+}
+
+}  // namespace
+}  // namespace fetouch::testing
+
+namespace fetouch::testing {
+namespace {
+
+// A scene whose tissue is the phantom's sac given as a volume (mesh.volume with meshing options):
+// `fetouch solve` meshes it once (cached), solves, and the fixed band's reaction balances the
+// probe's push (global equilibrium); the second run reuses the cached mesh; an empty segmentation
+// is a clear error.
+TEST(MeshCommand, SceneVolumeIsMeshedOnceAndSolved) {
+  const fs::path dir = fs::temp_directory_path() / ("fetouch_scene_volume_" + std::to_string(::getpid()));
+  fs::remove_all(dir);
+  ASSERT_EQ(run_command(fetouch("phantom --spacing 2 --out " + (dir / "phantom").string())).exit_code, 0);
+  const auto scene = [&](const std::string& name, const std::string& labels) {
+    std::ofstream out(dir / name);
+    out << "name: sac\nunits: SI\nmesh:\n  volume: phantom/phantom_labels.mha\n  element: p1\n"
+           "  meshing: {labels: " << labels << ", target_size_m: 0.012}\n"
+           "material: {model: neo_hookean, youngs_modulus_pa: 20000, poisson_ratio: 0.45}\n"
+           "boundary:\n  - name: base\n    type: fixed\n    select: {box: {min: [-1, -1, -1], max: [1, 1, -0.03]}}\n";
+    return (dir / name).string();
+  };
+  const std::string env = "FETOUCH_CACHE_DIR=" + (dir / "cache").string() + " ";
+  const std::string press = " --radius 0.02 --press 0 0 0.05 0 0 -0.2 --json --out ";
+  const auto first = run_command(env + fetouch("solve " + scene("sac.yaml", "[1, 2, 3, 4, 5, 6]") + press + (dir / "a").string()));
+  ASSERT_EQ(first.exit_code, 0) << first.err;
+  EXPECT_NE(first.err.find("meshing the scene's volume"), std::string::npos) << first.err;
+  const YAML::Node j = YAML::Load(first.out);
+  ASSERT_TRUE(j["converged"].as<bool>());
+  EXPECT_NEAR(j["reactions_n"]["base"][2].as<double>(), 0.2, 1e-6);
+  EXPECT_NEAR(j["reactions_n"]["base"][0].as<double>(), 0, 1e-6);
+  const auto second = run_command(env + fetouch("solve " + (dir / "sac.yaml").string() + press + (dir / "b").string()));
+  ASSERT_EQ(second.exit_code, 0) << second.err;
+  EXPECT_EQ(second.err.find("meshing the scene's volume"), std::string::npos) << second.err;
+  EXPECT_EQ(YAML::Load(second.out)["reactions_n"]["base"][2].as<double>(), j["reactions_n"]["base"][2].as<double>());
+  const auto empty = run_command(env + fetouch("solve " + scene("empty.yaml", "[9]") + press + (dir / "c").string()));
+  EXPECT_EQ(empty.exit_code, 2);
+  EXPECT_NE(empty.err.find("could not be meshed"), std::string::npos) << empty.err;
+  EXPECT_NE(empty.err.find("empty"), std::string::npos) << empty.err;
   fs::remove_all(dir);
 }
 

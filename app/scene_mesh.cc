@@ -1,0 +1,116 @@
+#include "app/scene_mesh.h"
+
+#include <mpi.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <cstdlib>
+#include <functional>
+#include <sstream>
+#include <stdexcept>
+
+#include "app/log.h"
+#include "imaging/segmentation.h"
+#include "imaging/volume_io.h"
+#include "meshes/volume_mesher.h"
+
+namespace fetouch::app {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+// What decides the mesh: the volume (path, size, modification time) and every meshing option.
+std::string cache_key(const config::MeshSpec& spec) {
+  std::ostringstream key;
+  key.precision(17);
+  const auto& m = spec.meshing;
+  std::error_code ec;
+  key << fs::absolute(spec.path).string() << '|';
+  if (fs::is_regular_file(spec.path, ec)) {
+    key << fs::file_size(spec.path, ec) << '|' << fs::last_write_time(spec.path, ec).time_since_epoch().count();
+  } else {
+    for (const auto& entry : fs::directory_iterator(spec.path, ec))
+      key << entry.path().filename().string() << ':' << entry.last_write_time(ec).time_since_epoch().count() << ',';
+  }
+  key << '|' << m.target_size_m << '|' << m.fetus << '|' << (m.threshold ? *m.threshold : -1.0) << '|'
+      << static_cast<int>(m.smoothing) << '|' << m.smoothing_sigma_m << '|' << m.closing_voxels << '|';
+  for (int l : m.labels) key << l << ',';
+  if (m.refine_center_m)
+    key << '|' << (*m.refine_center_m)[0] << ',' << (*m.refine_center_m)[1] << ',' << (*m.refine_center_m)[2] << ','
+        << m.refine_radius_m << ',' << m.refine_size_m;
+  return key.str();
+}
+
+void mesh_into(const config::MeshSpec& spec, const fs::path& file) {
+  const auto& m = spec.meshing;
+  log::info() << "meshing the scene's volume " << spec.path.string() << " (once; cached as " << file.string() << ")";
+  const auto start = std::chrono::steady_clock::now();
+  const imaging::Volume<float> volume = imaging::read_volume(spec.path);
+  imaging::TissueSegmentation segmentation;
+  segmentation.labels = m.labels, segmentation.fetus = m.fetus, segmentation.closing = m.closing_voxels;
+  segmentation.smoothing_mm = m.smoothing_sigma_m * 1e3;
+  if (m.threshold) segmentation.threshold = static_cast<float>(*m.threshold);
+  segmentation.smoothing = m.smoothing == config::SmoothingFilter::none     ? imaging::TissueSegmentation::Smoothing::none
+                           : m.smoothing == config::SmoothingFilter::median ? imaging::TissueSegmentation::Smoothing::median
+                                                                            : imaging::TissueSegmentation::Smoothing::gaussian;
+  const imaging::Mask mask = imaging::segment_tissue(volume, segmentation);
+  meshes::MaskVolume input;
+  input.dimensions = mask.dimensions, input.spacing_mm = mask.spacing_mm, input.origin_mm = mask.origin_mm;
+  input.direction = mask.direction, input.data = mask.data;
+  meshes::MeshingSettings settings;
+  settings.element_size_mm = m.target_size_m * 1e3;
+  if (m.refine_center_m) {
+    for (int d = 0; d < 3; ++d) settings.refine_center_mm[d] = (*m.refine_center_m)[d] * 1e3;
+    settings.refine_radius_mm = m.refine_radius_m * 1e3, settings.refine_size_mm = m.refine_size_m * 1e3;
+  }
+  settings.progress = [](const std::string& step, double) { log::detail() << "meshing: " << step; };
+  const meshes::VolumeMesh mesh = meshes::mesh_mask(input, settings);
+  if (mesh.quality.inverted + mesh.quality.degenerate > 0 || !mesh.closed_manifold)
+    throw std::runtime_error("the mesh has inverted or degenerate elements or an open boundary");
+  fs::create_directories(file.parent_path());
+  const fs::path partial = file.string() + ".partial" + std::to_string(::getpid()) + ".vtu";
+  meshes::write_volume_mesh(mesh, partial);
+  fs::rename(partial, file);  // whole or not at all, even with another fetouch meshing the same
+  log::info() << mesh.tetrahedra.size() << " tetrahedra, smallest dihedral angle " << mesh.quality.min_dihedral_deg
+              << " deg, volume " << 100 * (mesh.volume_m3 / mesh.segmented_volume_m3 - 1) << " % off the voxels', in "
+              << std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count() << " s";
+}
+
+}  // namespace
+
+fs::path mesh_cache_dir() {
+  if (const char* d = std::getenv("FETOUCH_CACHE_DIR"); d && *d) return d;
+  if (const char* d = std::getenv("XDG_CACHE_HOME"); d && *d) return fs::path(d) / "fetouch";
+  if (const char* d = std::getenv("HOME"); d && *d) return fs::path(d) / ".cache" / "fetouch";
+  return fs::temp_directory_path() / "fetouch-cache";
+}
+
+config::MeshSpec mesh_scene_volume(const config::MeshSpec& spec) {
+  if (spec.source != config::MeshSource::volume) return spec;
+  std::ostringstream name;
+  name << "mesh-" << std::hex << std::hash<std::string>{}(cache_key(spec)) << ".vtu";
+  const fs::path file = mesh_cache_dir() / "meshes" / name.str();
+  int initialised = 0, rank = 0, ranks = 1;
+  MPI_Initialized(&initialised);
+  if (initialised) MPI_Comm_rank(MPI_COMM_WORLD, &rank), MPI_Comm_size(MPI_COMM_WORLD, &ranks);
+  int ok = 1;
+  std::string failure;
+  if (rank == 0 && !fs::exists(file)) {
+    try {
+      mesh_into(spec, file);
+    } catch (const std::exception& e) {
+      ok = 0, failure = e.what();
+    }
+  }
+  if (ranks > 1) MPI_Bcast(&ok, 1, MPI_INT, 0, MPI_COMM_WORLD);
+  if (!ok)
+    throw std::runtime_error(spec.path.string() + ": could not be meshed: " + (rank == 0 ? failure : "(see rank 0)"));
+  if (rank == 0 && fs::exists(file)) log::detail() << "the scene's volume mesh: " << file.string();
+  config::MeshSpec out = spec;
+  out.source = config::MeshSource::file;
+  out.path = file;
+  return out;
+}
+
+}  // namespace fetouch::app

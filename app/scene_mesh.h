@@ -1,0 +1,21 @@
+// A scene whose tissue is an ultrasound volume (mesh.volume) is meshed here, by the same pipeline
+// as `fetouch mesh` (imaging/segmentation.h, meshes/volume_mesher.h), before the solver reads it.
+// The mesh is kept in a cache keyed by the volume (path, size, time) and the meshing options, so a
+// scene is meshed once: $FETOUCH_CACHE_DIR, else $XDG_CACHE_HOME/fetouch, else ~/.cache/fetouch,
+// else the temporary folder. Under MPI rank 0 meshes and the others read its file (Gmsh's result
+// varies slightly from run to run, so ranks must not mesh on their own).
+#pragma once
+
+#include <filesystem>
+
+#include "config/scene.h"
+
+namespace fetouch::app {
+
+// The spec unchanged unless it is a volume; then a `file` spec of the cached .vtu (meshed now if
+// not cached). Throws std::runtime_error naming the volume and what failed.
+config::MeshSpec mesh_scene_volume(const config::MeshSpec& spec);
+
+std::filesystem::path mesh_cache_dir();
+
+}  // namespace fetouch::app
