@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstdint>
 #include <fstream>
+#include <iterator>
 #include <string>
 #include <vector>
 
@@ -27,6 +28,11 @@ class VolumeOrientation : public ::testing::Test {
   void TearDown() override { fs::remove_all(dir_); }
   fs::path dir_;
 };
+
+std::string read_file(const fs::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+}
 
 // A rotation by `angle` about the axis (1, 1, 1) / sqrt 3 (Rodrigues), row-major.
 std::array<double, 9> rotation(double angle) {
@@ -234,6 +240,57 @@ TEST_F(VolumeOrientation, EmptyFolderAndUnevenSlicesAreRefused) {
   } catch (const std::runtime_error& e) {
     EXPECT_NE(std::string(e.what()).find("uneven"), std::string::npos) << e.what();
   }
+}
+
+}  // namespace
+}  // namespace fetouch::imaging
+
+namespace fetouch::imaging {
+namespace {
+
+// Every kind of broken volume file gives an error that names the file (and what is wrong), never
+// a volume of garbage.
+TEST_F(VolumeOrientation, BrokenFilesAreRefusedByName) {
+  Volume<std::uint8_t> v;
+  v.dimensions = {20, 20, 20};
+  v.data.resize(8000);
+  for (std::size_t i = 0; i < v.data.size(); ++i) v.data[i] = static_cast<std::uint8_t>(i * 7919 % 251);
+  write_volume(v, dir_ / "whole.mha");
+  const std::string whole = read_file(dir_ / "whole.mha");
+  const auto write = [&](const std::string& name, const std::string& bytes) {
+    std::ofstream(dir_ / name, std::ios::binary) << bytes;
+    return dir_ / name;
+  };
+  const auto refused = [&](const fs::path& path, const std::string& why) {
+    try {
+      const Volume<float> back = read_volume(path);
+      ADD_FAILURE() << path << " was read (" << back.data.size() << " voxels); expected: " << why;
+    } catch (const std::runtime_error& e) {
+      EXPECT_NE(std::string(e.what()).find(path.string()), std::string::npos) << e.what();
+      EXPECT_NE(std::string(e.what()).find(why), std::string::npos) << e.what();
+    }
+  };
+  // Compressed data cut in half.
+  refused(write("cut.mha", whole.substr(0, whole.size() / 2)), "");
+  // Header fields that are wrong.
+  const std::string body = std::string(8000, '\x01');
+  refused(write("type.mha", "ObjectType = Image\nNDims = 3\nDimSize = 20 20 20\nElementType = MET_FOO\nElementDataFile = LOCAL\n" + body),
+          "ElementType");
+  refused(write("nodims.mha", "ObjectType = Image\nNDims = 3\nElementType = MET_UCHAR\nElementDataFile = LOCAL\n" + body),
+          "DimSize");
+  // Dimensions the data does not fill: inline and in a separate raw file; a raw file missing.
+  refused(write("big.mha", "ObjectType = Image\nNDims = 3\nDimSize = 20 20 21\nElementType = MET_UCHAR\nElementDataFile = LOCAL\n" + body),
+          "8400");
+  write("short.raw", std::string(4000, '\x01'));
+  refused(write("short.mhd", "ObjectType = Image\nNDims = 3\nDimSize = 20 20 20\nElementType = MET_UCHAR\nElementDataFile = short.raw\n"),
+          "4000");
+  refused(write("noraw.mhd", "ObjectType = Image\nNDims = 3\nDimSize = 20 20 20\nElementType = MET_UCHAR\nElementDataFile = none.raw\n"),
+          "missing");
+  refused(write("short.nrrd", "NRRD0004\ntype: unsigned char\ndimension: 3\nsizes: 20 20 20\nencoding: raw\n\n" + std::string(4000, '\x01')),
+          "");
+  refused(write("empty.vti", ""), "");
+  refused(dir_ / "absent.mha", "no such file");
+  refused(write("volume.png", "\x89PNG"), "unknown volume format");
 }
 
 }  // namespace
