@@ -9,6 +9,7 @@
 #include <cstdlib>
 #include <new>
 
+#include "haptics/devices.h"
 #include "haptics/haptic_loop.h"
 #include "haptics/linear_surface_environment.h"
 
@@ -83,6 +84,21 @@ TEST(TickAllocations, NoneForAnyModelHoldOrContactCount) {
       for (int contacts : {1, 4})
         EXPECT_EQ(count_tick_allocations(kind, hold, contacts), 0)
             << "model " << static_cast<int>(kind) << " hold " << static_cast<int>(hold) << " contacts " << contacts;
+}
+
+TEST(TickAllocations, NoneInTheDevicesWithoutHardware) {
+  Trajectory path;
+  path.times_s = {0, 0.2, 0.4};
+  path.positions_m = {Eigen::Vector3d::Zero(), Eigen::Vector3d(0, 0, -0.01), Eigen::Vector3d(0.01, 0, -0.01)};
+  ReplayDevice replay(path, 1e-3);
+  VirtualOperator hand(path, HandParameters{}, 1e-3);
+  allocations = 0;
+  armed = true;
+  Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+  for (int k = 0; k < 600; ++k) sum += replay.next(Eigen::Vector3d(0, 0, 1)) + hand.next(Eigen::Vector3d(0, 0, 1));
+  armed = false;
+  EXPECT_EQ(allocations.load(), 0);
+  EXPECT_TRUE(sum.allFinite());
 }
 
 }  // namespace

@@ -1,0 +1,157 @@
+#include "haptics/devices.h"
+
+#include <Eigen/Dense>
+
+#include <algorithm>
+#include <cmath>
+#include <fstream>
+#include <iomanip>
+#include <sstream>
+#include <stdexcept>
+
+namespace fetouch::haptics {
+
+Eigen::Vector3d Trajectory::at(double t) const {
+  if (times_s.empty()) return Eigen::Vector3d::Zero();
+  if (t <= times_s.front()) return positions_m.front();
+  if (t >= times_s.back()) return positions_m.back();
+  const auto after = std::upper_bound(times_s.begin(), times_s.end(), t);
+  const std::size_t i = static_cast<std::size_t>(after - times_s.begin());
+  const double s = (t - times_s[i - 1]) / (times_s[i] - times_s[i - 1]);
+  return (1 - s) * positions_m[i - 1] + s * positions_m[i];
+}
+
+std::vector<Eigen::Vector3d> Trajectory::resampled(double period_s) const {
+  std::vector<Eigen::Vector3d> out;
+  if (times_s.empty()) return out;
+  // Tick k at t0 + k T; the last tick is the one at (or, by rounding, just before) the last time.
+  const long ticks = static_cast<long>(std::floor(duration_s() / period_s + 1e-9)) + 1;
+  out.reserve(static_cast<std::size_t>(ticks));
+  for (long k = 0; k < ticks; ++k) out.push_back(at(times_s.front() + k * period_s));
+  return out;
+}
+
+Trajectory read_trajectory_csv(const std::filesystem::path& path) {
+  std::ifstream in(path);
+  if (!in) throw std::runtime_error(path.string() + ": cannot be opened");
+  Trajectory t;
+  std::string line;
+  int number = 0;
+  while (std::getline(in, line)) {
+    ++number;
+    const auto first = line.find_first_not_of(" \t\r");
+    if (first == std::string::npos || line[first] == '#') continue;
+    if (t.times_s.empty() && std::isalpha(static_cast<unsigned char>(line[first]))) continue;  // a header
+    std::string cell;
+    std::istringstream cells(line);
+    double v[4];
+    int n = 0;
+    while (std::getline(cells, cell, ',')) {
+      std::istringstream number_in(cell);
+      double x;
+      std::string rest;
+      if (n >= 4 || !(number_in >> x) || (number_in >> rest))
+        throw std::runtime_error(path.string() + ":" + std::to_string(number) + ": expected four numbers t, x, y, z, found '" +
+                                 line + "'");
+      if (!std::isfinite(x))
+        throw std::runtime_error(path.string() + ":" + std::to_string(number) + ": a value is not finite: '" + cell + "'");
+      v[n++] = x;
+    }
+    if (n != 4)
+      throw std::runtime_error(path.string() + ":" + std::to_string(number) + ": expected four numbers t, x, y, z, found '" +
+                               line + "'");
+    if (!t.times_s.empty() && !(v[0] > t.times_s.back()))
+      throw std::runtime_error(path.string() + ":" + std::to_string(number) + ": time " + std::to_string(v[0]) + " s is not after the previous row's " +
+                               std::to_string(t.times_s.back()) + " s");
+    t.times_s.push_back(v[0]);
+    t.positions_m.emplace_back(v[1], v[2], v[3]);
+  }
+  if (t.times_s.size() < 2)
+    throw std::runtime_error(path.string() + ": a trajectory needs at least two rows of t, x, y, z (found " +
+                             std::to_string(t.times_s.size()) + ")");
+  return t;
+}
+
+void write_trajectory_csv(const Trajectory& trajectory, const std::filesystem::path& path, const std::string& comment) {
+  std::ofstream out(path);
+  if (!out) throw std::runtime_error(path.string() + ": cannot be written");
+  std::istringstream lines(comment);
+  for (std::string line; std::getline(lines, line);) out << "# " << line << "\n";
+  out << "t_s,x_m,y_m,z_m\n" << std::setprecision(17);
+  for (std::size_t i = 0; i < trajectory.times_s.size(); ++i) {
+    const auto& p = trajectory.positions_m[i];
+    out << trajectory.times_s[i] << ',' << p.x() << ',' << p.y() << ',' << p.z() << "\n";
+  }
+  if (!out) throw std::runtime_error(path.string() + ": could not be written");
+}
+
+ReplayDevice::ReplayDevice(const Trajectory& trajectory, double period_s) : points_(trajectory.resampled(period_s)) {
+  if (points_.empty()) throw std::invalid_argument("replay: an empty trajectory");
+}
+
+Eigen::Vector3d ReplayDevice::next(const Eigen::Vector3d&) noexcept {
+  const long i = std::min<long>(tick_, static_cast<long>(points_.size()) - 1);
+  ++tick_;
+  return points_[static_cast<std::size_t>(i)];
+}
+
+namespace {
+
+// exp(M) of a small matrix by scaling and squaring a Taylor series (to machine precision).
+Eigen::Matrix3d exponential(const Eigen::Matrix3d& m) {
+  const double norm = m.cwiseAbs().rowwise().sum().maxCoeff();
+  const int squarings = norm > 0.5 ? static_cast<int>(std::ceil(std::log2(norm / 0.5))) : 0;
+  const Eigen::Matrix3d a = m / std::pow(2.0, squarings);
+  Eigen::Matrix3d sum = Eigen::Matrix3d::Identity(), term = Eigen::Matrix3d::Identity();
+  for (int k = 1; k <= 24; ++k) {
+    term = term * a / k;
+    sum += term;
+  }
+  for (int s = 0; s < squarings; ++s) sum = sum * sum;
+  return sum;
+}
+
+}  // namespace
+
+VirtualOperator::VirtualOperator(const Trajectory& trajectory, const HandParameters& hand, double period_s)
+    : targets_(trajectory.resampled(period_s)), stiffness_(hand.stiffness_n_per_m), damping_(hand.damping_n_s_per_m) {
+  if (!(hand.mass_kg > 0) || !(hand.stiffness_n_per_m > 0) || !(hand.damping_n_s_per_m >= 0))
+    throw std::invalid_argument("operator: the hand's mass and stiffness must be positive and its damping not negative");
+  if (targets_.empty()) throw std::invalid_argument("operator: an empty trajectory");
+  // The target's velocity, by central differences (one-sided at the ends).
+  const std::size_t n = targets_.size();
+  target_velocities_.assign(n, Eigen::Vector3d::Zero());
+  for (std::size_t k = 0; k < n && n > 1; ++k) {
+    const std::size_t a = k == 0 ? 0 : k - 1, b = k + 1 == n ? k : k + 1;
+    target_velocities_[k] = (targets_[b] - targets_[a]) / (double(b - a) * period_s);
+  }
+  // ZOH discretisation of x' = v, v' = (-k x - b v + u) / m: exp of the augmented matrix.
+  Eigen::Matrix3d augmented = Eigen::Matrix3d::Zero();
+  augmented(0, 1) = 1;
+  augmented(1, 0) = -hand.stiffness_n_per_m / hand.mass_kg;
+  augmented(1, 1) = -hand.damping_n_s_per_m / hand.mass_kg;
+  augmented(1, 2) = 1 / hand.mass_kg;
+  const Eigen::Matrix3d e = exponential(augmented * period_s);
+  phi_ = e.topLeftCorner<2, 2>();
+  gamma_ = e.block<2, 1>(0, 2);
+  position_ = targets_.front();
+  velocity_.setZero();
+}
+
+Eigen::Vector3d VirtualOperator::next(const Eigen::Vector3d& rendered_force) noexcept {
+  if (tick_ > 0) {
+    // Over the last tick: its target and the force rendered at it, held.
+    const std::size_t k = static_cast<std::size_t>(std::min<long>(tick_ - 1, static_cast<long>(targets_.size()) - 1));
+    const Eigen::Vector3d force = rendered_force.allFinite() ? rendered_force : Eigen::Vector3d::Zero();
+    const Eigen::Vector3d u = stiffness_ * targets_[k] + damping_ * target_velocities_[k] + force;
+    for (int d = 0; d < 3; ++d) {
+      const double x = phi_(0, 0) * position_[d] + phi_(0, 1) * velocity_[d] + gamma_[0] * u[d];
+      const double v = phi_(1, 0) * position_[d] + phi_(1, 1) * velocity_[d] + gamma_[1] * u[d];
+      position_[d] = x, velocity_[d] = v;
+    }
+  }
+  ++tick_;
+  return position_;
+}
+
+}  // namespace fetouch::haptics

@@ -1,0 +1,89 @@
+// Devices without hardware (ARCHITECTURE.md section 2): what moves a probe when no PHANTOM is there.
+//   - Trajectory: timed probe positions (a CSV of t, x, y, z in s and m, or a recording), resampled
+//     to the haptic rate by linear interpolation, held at its last point after its end.
+//   - ReplayDevice: plays a trajectory back, tick by tick, whatever force it is sent.
+//   - VirtualOperator: a hand model. A mass m pulled towards the trajectory's point (the target)
+//     by a spring k and a damper b, and pushed by the force the device renders:
+//         m x'' = k (x_t - x) + b (v_t - v) + F_device,
+//     integrated exactly over each tick for inputs held over the tick (zero-order hold: the state
+//     transition exp(A T) and its input matrix, computed once), so the force fed back changes the
+//     motion as a real hand's would.
+// next() is called once per tick from the haptic thread: it never allocates, locks, throws or waits.
+#pragma once
+
+#include <Eigen/Core>
+
+#include <filesystem>
+#include <string>
+#include <vector>
+
+namespace fetouch::haptics {
+
+struct Trajectory {
+  std::vector<double> times_s;                // strictly increasing
+  std::vector<Eigen::Vector3d> positions_m;   // one per time
+
+  double duration_s() const { return times_s.empty() ? 0 : times_s.back() - times_s.front(); }
+  // The position at time t (linear between samples, held before the first and after the last).
+  Eigen::Vector3d at(double t) const;
+  // Samples every `period_s` from the first time to the last (inclusive when it falls on a tick).
+  std::vector<Eigen::Vector3d> resampled(double period_s) const;
+};
+
+// Reads `t, x, y, z` rows (s, m); a header line of names and lines starting with '#' are skipped.
+// Throws std::runtime_error naming the file, the line and the value: not four numbers, a time not
+// after the previous one, fewer than two rows, a value not finite.
+Trajectory read_trajectory_csv(const std::filesystem::path& path);
+
+// Writes the same format (with a header), full precision.
+void write_trajectory_csv(const Trajectory& trajectory, const std::filesystem::path& path, const std::string& comment = "");
+
+class Device {
+ public:
+  virtual ~Device() = default;
+  // The device point for the next tick, given the force the device rendered at the last one (N,
+  // on the handle). Real-time safe.
+  virtual Eigen::Vector3d next(const Eigen::Vector3d& rendered_force) noexcept = 0;
+  // True once the trajectory has been played to its end.
+  virtual bool finished() const noexcept = 0;
+  virtual long ticks() const noexcept = 0;  // the number of ticks it lasts
+};
+
+class ReplayDevice final : public Device {
+ public:
+  ReplayDevice(const Trajectory& trajectory, double period_s);
+  Eigen::Vector3d next(const Eigen::Vector3d& rendered_force) noexcept override;
+  bool finished() const noexcept override { return tick_ >= static_cast<long>(points_.size()); }
+  long ticks() const noexcept override { return static_cast<long>(points_.size()); }
+
+ private:
+  std::vector<Eigen::Vector3d> points_;
+  long tick_ = 0;
+};
+
+struct HandParameters {
+  double mass_kg = 0.3;
+  double stiffness_n_per_m = 300;
+  double damping_n_s_per_m = 8;
+};
+
+class VirtualOperator final : public Device {
+ public:
+  // Starts at rest on the trajectory's first point. Throws std::invalid_argument for a mass,
+  // stiffness or damping that is not positive (damping may be zero).
+  VirtualOperator(const Trajectory& trajectory, const HandParameters& hand, double period_s);
+  Eigen::Vector3d next(const Eigen::Vector3d& rendered_force) noexcept override;
+  bool finished() const noexcept override { return tick_ >= static_cast<long>(targets_.size()); }
+  long ticks() const noexcept override { return static_cast<long>(targets_.size()); }
+  const Eigen::Vector3d& velocity() const { return velocity_; }
+
+ private:
+  std::vector<Eigen::Vector3d> targets_, target_velocities_;
+  Eigen::Matrix2d phi_;    // exp(A T), A = [0 1; -k/m -b/m]
+  Eigen::Vector2d gamma_;  // int_0^T exp(A s) ds [0; 1/m]
+  double stiffness_, damping_;
+  Eigen::Vector3d position_, velocity_;
+  long tick_ = 0;
+};
+
+}  // namespace fetouch::haptics

@@ -1,0 +1,136 @@
+// Devices without hardware: trajectories read from CSV (and refused with file:line when broken),
+// resampled by linear interpolation; the replay device; the virtual operator against the closed
+// forms of a mass-spring-damper (undamped step response, static deflection under a force, tracking
+// of a ramp).
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+
+#include "haptics/devices.h"
+
+namespace fetouch::haptics {
+namespace {
+
+namespace fs = std::filesystem;
+
+fs::path write_csv(const std::string& name, const std::string& text) {
+  const fs::path path = fs::temp_directory_path() / ("fetouch_traj_" + std::to_string(::getpid()) + "_" + name);
+  std::ofstream(path) << text;
+  return path;
+}
+
+TEST(Trajectory, ReadsCsvAndInterpolates) {
+  const auto path = write_csv("ok.csv", "# a comment\nt_s,x_m,y_m,z_m\n0,0,0,0.06\n0.5, 0, 0, 0.05\n1.5,0.01,0,0.05\n");
+  const Trajectory t = read_trajectory_csv(path);
+  ASSERT_EQ(t.times_s.size(), 3u);
+  EXPECT_DOUBLE_EQ(t.duration_s(), 1.5);
+  EXPECT_NEAR(t.at(0.25).z(), 0.055, 1e-15);
+  EXPECT_NEAR(t.at(1.0).x(), 0.005, 1e-15);
+  EXPECT_EQ(t.at(-1), t.positions_m.front());
+  EXPECT_EQ(t.at(9), t.positions_m.back());
+  const auto ticks = t.resampled(1e-3);
+  ASSERT_EQ(ticks.size(), 1501u);  // 0, 1 ms, ..., 1.5 s
+  EXPECT_NEAR(ticks[250].z(), 0.055, 1e-15);
+  EXPECT_NEAR(ticks[1500].x(), 0.01, 1e-15);
+  // Written and read again: the same numbers.
+  write_trajectory_csv(t, path, "round trip");
+  const Trajectory back = read_trajectory_csv(path);
+  EXPECT_EQ(back.times_s, t.times_s);
+  for (std::size_t i = 0; i < t.positions_m.size(); ++i) EXPECT_EQ(back.positions_m[i], t.positions_m[i]);
+  fs::remove(path);
+}
+
+TEST(Trajectory, BrokenFilesNameTheLine) {
+  const auto refused = [](const std::string& name, const std::string& text, const std::string& where) {
+    const auto path = write_csv(name, text);
+    try {
+      read_trajectory_csv(path);
+      ADD_FAILURE() << name << " was accepted";
+    } catch (const std::runtime_error& e) {
+      EXPECT_NE(std::string(e.what()).find(path.string() + where), std::string::npos) << e.what();
+    }
+    fs::remove(path);
+  };
+  refused("three.csv", "t,x,y,z\n0,0,0,0\n1,2,3\n", ":3:");
+  refused("word.csv", "0,0,0,0\n1,0,zero,0\n", ":2:");
+  refused("back.csv", "0,0,0,0\n1,0,0,0\n0.5,0,0,0\n", ":3:");
+  refused("nan.csv", "0,0,0,0\n1,nan,0,0\n", ":2:");
+  refused("one.csv", "t,x,y,z\n0,0,0,0\n", ": a trajectory needs at least two rows");
+  EXPECT_THROW(read_trajectory_csv("/nonexistent/path.csv"), std::runtime_error);
+}
+
+TEST(ReplayDevice, PlaysTheResampledPathWhateverTheForce) {
+  Trajectory t;
+  t.times_s = {0, 0.01};
+  t.positions_m = {Eigen::Vector3d(0, 0, 0), Eigen::Vector3d(0, 0, -0.01)};
+  ReplayDevice device(t, 1e-3);
+  EXPECT_EQ(device.ticks(), 11);
+  for (int k = 0; k <= 10; ++k) EXPECT_NEAR(device.next(Eigen::Vector3d(0, 0, 5)).z(), -0.001 * k, 1e-15) << k;
+  EXPECT_TRUE(device.finished());
+  EXPECT_NEAR(device.next(Eigen::Vector3d::Zero()).z(), -0.01, 1e-15);  // held at the end
+}
+
+// A target that steps by 1 cm at the first tick.
+Trajectory step_target(double seconds) {
+  Trajectory t;
+  t.times_s = {0, 1e-3, seconds};
+  t.positions_m = {Eigen::Vector3d::Zero(), Eigen::Vector3d(0, 0, 0.01), Eigen::Vector3d(0, 0, 0.01)};
+  return t;
+}
+
+TEST(VirtualOperator, UndampedStepIsACosine) {
+  // m x'' = k (x_t - x) with x_t = 1 cm from t = T: x(t) = 1 cm (1 - cos w (t - T)), w = sqrt(k/m).
+  // The discretisation is exact for inputs held over a tick, so it matches to rounding.
+  const HandParameters hand{0.3, 300, 0};
+  VirtualOperator op(step_target(1.0), hand, 1e-3);
+  const double w = std::sqrt(300 / 0.3);
+  double worst = 0;
+  for (int k = 0; k <= 1000; ++k) {
+    const double z = op.next(Eigen::Vector3d::Zero()).z();
+    const double expected = k == 0 ? 0 : 0.01 * (1 - std::cos(w * (k - 1) * 1e-3));
+    worst = std::max(worst, std::abs(z - expected));
+  }
+  EXPECT_LT(worst, 1e-14);
+}
+
+TEST(VirtualOperator, ForceFedBackDeflectsTheHandByForceOverStiffness) {
+  // Held still at the target with 3 N pushing up: the hand settles at x_t + F / k = +1 cm.
+  Trajectory still;
+  still.times_s = {0, 5};
+  still.positions_m = {Eigen::Vector3d(0.02, 0, 0), Eigen::Vector3d(0.02, 0, 0)};
+  VirtualOperator op(still, HandParameters{0.3, 300, 8}, 1e-3);
+  Eigen::Vector3d x;
+  for (int k = 0; k < 5000; ++k) x = op.next(Eigen::Vector3d(0, 0, 3));
+  EXPECT_NEAR(x.z(), 3.0 / 300, 1e-9);
+  EXPECT_NEAR(x.x(), 0.02, 1e-12);
+  // A force that is not finite is not applied.
+  const Eigen::Vector3d before = x;
+  x = op.next(Eigen::Vector3d(0, 0, std::nan("")));
+  EXPECT_TRUE(x.allFinite());
+  EXPECT_NEAR(x.z(), before.z(), 1e-4);
+}
+
+TEST(VirtualOperator, TracksARampWithAtMostHalfATickOfLag) {
+  // x_t = c t, v_t = c: x = c t solves m x'' = k (x_t - x) + b (v_t - v); holding the input over
+  // each tick delays it by T / 2 at most once the start has died away.
+  const double c = 0.02;  // m/s
+  Trajectory ramp;
+  ramp.times_s = {0, 3};
+  ramp.positions_m = {Eigen::Vector3d::Zero(), Eigen::Vector3d(c * 3, 0, 0)};
+  VirtualOperator op(ramp, HandParameters{0.3, 300, 8}, 1e-3);
+  Eigen::Vector3d x;
+  for (int k = 0; k <= 2000; ++k) x = op.next(Eigen::Vector3d::Zero());
+  EXPECT_NEAR(x.x(), c * 2.0, c * 1e-3);
+  EXPECT_LE(x.x(), c * 2.0 + 1e-12);
+}
+
+TEST(VirtualOperator, RefusesANonPhysicalHand) {
+  EXPECT_THROW(VirtualOperator(step_target(1), HandParameters{0, 300, 8}, 1e-3), std::invalid_argument);
+  EXPECT_THROW(VirtualOperator(step_target(1), HandParameters{0.3, -1, 8}, 1e-3), std::invalid_argument);
+  EXPECT_THROW(VirtualOperator(step_target(1), HandParameters{0.3, 300, -1}, 1e-3), std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace fetouch::haptics
