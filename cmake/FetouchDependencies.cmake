@@ -11,12 +11,12 @@ find_package(MPI REQUIRED COMPONENTS C CXX)
 # The parallel (OpenMPI) HDF5 that deal.II and PETSc use, so one libhdf5 ends up in the process.
 set(HDF5_PREFER_PARALLEL ON)
 find_package(HDF5 REQUIRED COMPONENTS C)
-# zlib: checking compressed volume data (imaging/volume_io.cc) before VTK reads it.
-find_package(ZLIB REQUIRED)
 if(NOT HDF5_IS_PARALLEL)
   message(WARNING "Fetouch: the HDF5 found (${HDF5_VERSION}) is not the parallel build; "
                   "install libhdf5-openmpi-dev")
 endif()
+# zlib: checking compressed volume data (imaging/volume_io.cc) before VTK reads it.
+find_package(ZLIB REQUIRED)
 
 find_package(VTK 9 REQUIRED COMPONENTS
   CommonCore CommonDataModel CommonExecutionModel

@@ -1,0 +1,361 @@
+#include "app/recording.h"
+
+#include <hdf5.h>
+
+#include <algorithm>
+#include <map>
+#include <stdexcept>
+
+namespace fetouch::app {
+
+namespace {
+
+constexpr hsize_t kChunkRows = 1024;
+
+// HDF5's own error printing off (the errors thrown here name the file and the step).
+void quiet_hdf5() { H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr); }
+
+void check(herr_t status, const std::string& what) {
+  if (status < 0) throw std::runtime_error(what);
+}
+
+hid_t checked(hid_t id, const std::string& what) {
+  if (id < 0) throw std::runtime_error(what);
+  return id;
+}
+
+// One extendable dataset: rows of `columns` values of `type`.
+struct Series {
+  hid_t dataset = -1, type = -1;
+  hsize_t columns = 1, rows = 0;
+  int rank = 1;
+
+  Series(hid_t group, const std::string& name, hid_t value_type, hsize_t value_columns, const std::string& file)
+      : type(value_type), columns(value_columns), rank(value_columns > 1 ? 2 : 1) {
+    const hsize_t dims[2] = {0, columns}, max[2] = {H5S_UNLIMITED, columns}, chunk[2] = {kChunkRows, columns};
+    const hid_t space = checked(H5Screate_simple(rank, dims, max), file + ": cannot describe " + name);
+    const hid_t properties = H5Pcreate(H5P_DATASET_CREATE);
+    H5Pset_chunk(properties, rank, chunk);
+    dataset = H5Dcreate2(group, name.c_str(), type, space, H5P_DEFAULT, properties, H5P_DEFAULT);
+    H5Pclose(properties);
+    H5Sclose(space);
+    checked(dataset, file + ": cannot create the dataset " + name);
+  }
+  Series(const Series&) = delete;
+  Series& operator=(const Series&) = delete;
+  ~Series() {
+    if (dataset >= 0) H5Dclose(dataset);
+  }
+
+  void append(const void* data, hsize_t n) {
+    if (n == 0) return;
+    const hsize_t size[2] = {rows + n, columns};
+    check(H5Dset_extent(dataset, size), "recording: cannot extend a dataset");
+    const hid_t space = H5Dget_space(dataset);
+    const hsize_t start[2] = {rows, 0}, count[2] = {n, columns};
+    H5Sselect_hyperslab(space, H5S_SELECT_SET, start, nullptr, count, nullptr);
+    const hid_t memory = H5Screate_simple(rank, count, nullptr);
+    const herr_t status = H5Dwrite(dataset, type, memory, space, H5P_DEFAULT, data);
+    H5Sclose(memory);
+    H5Sclose(space);
+    check(status, "recording: cannot write a dataset");
+    rows += n;
+  }
+};
+
+void write_attribute(hid_t object, const std::string& name, const std::string& value) {
+  const hid_t type = H5Tcopy(H5T_C_S1);
+  H5Tset_size(type, value.size() + 1);
+  H5Tset_strpad(type, H5T_STR_NULLTERM);
+  const hid_t space = H5Screate(H5S_SCALAR);
+  const hid_t attribute = H5Acreate2(object, name.c_str(), type, space, H5P_DEFAULT, H5P_DEFAULT);
+  const herr_t status = attribute < 0 ? -1 : H5Awrite(attribute, type, value.c_str());
+  if (attribute >= 0) H5Aclose(attribute);
+  H5Sclose(space);
+  H5Tclose(type);
+  check(status, "recording: cannot write the attribute " + name);
+}
+
+void write_attribute(hid_t object, const std::string& name, double value) {
+  const hid_t space = H5Screate(H5S_SCALAR);
+  const hid_t attribute = H5Acreate2(object, name.c_str(), H5T_NATIVE_DOUBLE, space, H5P_DEFAULT, H5P_DEFAULT);
+  const herr_t status = attribute < 0 ? -1 : H5Awrite(attribute, H5T_NATIVE_DOUBLE, &value);
+  if (attribute >= 0) H5Aclose(attribute);
+  H5Sclose(space);
+  check(status, "recording: cannot write the attribute " + name);
+}
+
+hid_t latest_format() {
+  const hid_t access = H5Pcreate(H5P_FILE_ACCESS);
+  H5Pset_libver_bounds(access, H5F_LIBVER_LATEST, H5F_LIBVER_LATEST);  // SWMR needs it
+  return access;
+}
+
+}  // namespace
+
+struct RecordingWriter::Impl {
+  std::string name;
+  hid_t file = -1;
+  struct DeviceSeries {
+    std::unique_ptr<Series> time, position, velocity, force, proxy, penetration, normal_force, in_contact;
+  };
+  std::vector<DeviceSeries> devices;
+  std::unique_ptr<Series> frame, time, solve, residual, margin, iterations, converged, eigenvalues, gains;
+  int contacts = 0;
+
+  ~Impl() {
+    devices.clear();
+    frame.reset(), time.reset(), solve.reset(), residual.reset(), margin.reset(), iterations.reset();
+    converged.reset(), eigenvalues.reset(), gains.reset();
+    if (file >= 0) H5Fclose(file);
+  }
+};
+
+RecordingWriter::RecordingWriter(const std::filesystem::path& path, const RecordingHeader& header)
+    : impl_(std::make_unique<Impl>()) {
+  quiet_hdf5();
+  Impl& r = *impl_;
+  r.name = path.string();
+  r.contacts = static_cast<int>(header.probes.size());
+  const hid_t access = latest_format();
+  r.file = H5Fcreate(r.name.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, access);
+  H5Pclose(access);
+  checked(r.file, r.name + ": cannot be created");
+  write_attribute(r.file, "program_version", header.program_version);
+  write_attribute(r.file, "scene_path", header.scene_path);
+  write_attribute(r.file, "scene_text", header.scene_text);
+  write_attribute(r.file, "local_model", header.local_model);
+  write_attribute(r.file, "hold", header.hold);
+  write_attribute(r.file, "haptic_rate_hz", header.haptic_rate_hz);
+  write_attribute(r.file, "ratio", header.ratio);
+  write_attribute(r.file, "contacts", r.contacts);
+  // The probes' groups are listed back in the order they were created.
+  const hid_t ordered = H5Pcreate(H5P_GROUP_CREATE);
+  H5Pset_link_creation_order(ordered, H5P_CRT_ORDER_TRACKED | H5P_CRT_ORDER_INDEXED);
+  const hid_t devices = H5Gcreate2(r.file, "devices", H5P_DEFAULT, ordered, H5P_DEFAULT);
+  H5Pclose(ordered);
+  checked(devices, r.name + ": cannot create /devices");
+  for (const std::string& probe : header.probes) {
+    const hid_t g = checked(H5Gcreate2(devices, probe.c_str(), H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT),
+                            r.name + ": cannot create /devices/" + probe);
+    Impl::DeviceSeries d;
+    d.time = std::make_unique<Series>(g, "time_s", H5T_NATIVE_DOUBLE, 1, r.name);
+    d.position = std::make_unique<Series>(g, "position_m", H5T_NATIVE_DOUBLE, 3, r.name);
+    d.velocity = std::make_unique<Series>(g, "velocity_m_per_s", H5T_NATIVE_DOUBLE, 3, r.name);
+    d.force = std::make_unique<Series>(g, "force_n", H5T_NATIVE_DOUBLE, 3, r.name);
+    d.proxy = std::make_unique<Series>(g, "proxy_m", H5T_NATIVE_DOUBLE, 3, r.name);
+    d.penetration = std::make_unique<Series>(g, "penetration_m", H5T_NATIVE_DOUBLE, 1, r.name);
+    d.normal_force = std::make_unique<Series>(g, "normal_force_n", H5T_NATIVE_DOUBLE, 1, r.name);
+    d.in_contact = std::make_unique<Series>(g, "in_contact", H5T_NATIVE_UINT8, 1, r.name);
+    r.devices.push_back(std::move(d));
+    H5Gclose(g);
+  }
+  H5Gclose(devices);
+  const hid_t frames = checked(H5Gcreate2(r.file, "frames", H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT), r.name + ": cannot create /frames");
+  r.frame = std::make_unique<Series>(frames, "frame", H5T_NATIVE_INT64, 1, r.name);
+  r.time = std::make_unique<Series>(frames, "time_s", H5T_NATIVE_DOUBLE, 1, r.name);
+  r.solve = std::make_unique<Series>(frames, "solve_s", H5T_NATIVE_DOUBLE, 1, r.name);
+  r.residual = std::make_unique<Series>(frames, "residual", H5T_NATIVE_DOUBLE, 1, r.name);
+  r.margin = std::make_unique<Series>(frames, "stability_margin", H5T_NATIVE_DOUBLE, 1, r.name);
+  r.iterations = std::make_unique<Series>(frames, "newton_iterations", H5T_NATIVE_INT32, 1, r.name);
+  r.converged = std::make_unique<Series>(frames, "converged", H5T_NATIVE_UINT8, 1, r.name);
+  r.eigenvalues = std::make_unique<Series>(frames, "stiffness_eigenvalues_n_per_m", H5T_NATIVE_DOUBLE,
+                                           static_cast<hsize_t>(std::max(1, r.contacts)), r.name);
+  r.gains = std::make_unique<Series>(frames, "gains", H5T_NATIVE_DOUBLE, 2, r.name);
+  write_attribute(r.gains->dataset, "columns", "proportional (Kh), integral (I per tick)");
+  H5Gclose(frames);
+  // From here on the file stays consistent on disk at every flush.
+  check(H5Fstart_swmr_write(r.file), r.name + ": cannot start single-writer/multiple-reader mode");
+}
+
+RecordingWriter::~RecordingWriter() {
+  try {
+    flush();
+  } catch (...) {
+  }
+}
+
+void RecordingWriter::append(int device, const DeviceSample* samples, std::size_t count) {
+  Impl::DeviceSeries& d = impl_->devices.at(static_cast<std::size_t>(device));
+  std::vector<double> time(count), position(3 * count), velocity(3 * count), force(3 * count), proxy(3 * count),
+      penetration(count), normal(count);
+  std::vector<std::uint8_t> contact(count);
+  for (std::size_t i = 0; i < count; ++i) {
+    const DeviceSample& s = samples[i];
+    time[i] = s.time_s, penetration[i] = s.penetration, normal[i] = s.normal_force, contact[i] = s.in_contact;
+    for (int k = 0; k < 3; ++k) {
+      position[3 * i + k] = s.position[k], velocity[3 * i + k] = s.velocity[k];
+      force[3 * i + k] = s.force[k], proxy[3 * i + k] = s.proxy[k];
+    }
+  }
+  d.time->append(time.data(), count);
+  d.position->append(position.data(), count);
+  d.velocity->append(velocity.data(), count);
+  d.force->append(force.data(), count);
+  d.proxy->append(proxy.data(), count);
+  d.penetration->append(penetration.data(), count);
+  d.normal_force->append(normal.data(), count);
+  d.in_contact->append(contact.data(), count);
+}
+
+void RecordingWriter::append(const FrameRecord& f) {
+  Impl& r = *impl_;
+  const std::int64_t frame = f.frame;
+  const std::int32_t iterations = f.newton_iterations;
+  const std::uint8_t converged = f.converged;
+  std::vector<double> eigenvalues(static_cast<std::size_t>(std::max(1, r.contacts)), 0.0);
+  for (std::size_t i = 0; i < eigenvalues.size() && i < f.stiffness_eigenvalues.size(); ++i) eigenvalues[i] = f.stiffness_eigenvalues[i];
+  const double gains[2] = {f.proportional_gain, f.integral_gain};
+  r.frame->append(&frame, 1);
+  r.time->append(&f.time_s, 1);
+  r.solve->append(&f.solve_s, 1);
+  r.residual->append(&f.residual, 1);
+  r.margin->append(&f.stability_margin, 1);
+  r.iterations->append(&iterations, 1);
+  r.converged->append(&converged, 1);
+  r.eigenvalues->append(eigenvalues.data(), 1);
+  r.gains->append(gains, 1);
+}
+
+void RecordingWriter::flush() { check(H5Fflush(impl_->file, H5F_SCOPE_GLOBAL), impl_->name + ": cannot be flushed"); }
+
+long RecordingWriter::samples(int device) const {
+  return static_cast<long>(impl_->devices.at(static_cast<std::size_t>(device)).time->rows);
+}
+
+namespace {
+
+// A whole dataset as doubles (or its integer values converted), with its row count.
+std::vector<double> read_all(hid_t group, const std::string& name, hsize_t columns, hsize_t* rows, const std::string& file) {
+  const hid_t dataset = H5Dopen2(group, name.c_str(), H5P_DEFAULT);
+  if (dataset < 0) throw std::runtime_error(file + ": no dataset " + name);
+  H5Drefresh(dataset);  // the newest extent a writer has flushed
+  const hid_t space = H5Dget_space(dataset);
+  hsize_t dims[2] = {0, 1};
+  H5Sget_simple_extent_dims(space, dims, nullptr);
+  H5Sclose(space);
+  *rows = dims[0];
+  std::vector<double> values(static_cast<std::size_t>(dims[0] * columns));
+  const herr_t status = values.empty() ? 0 : H5Dread(dataset, H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, values.data());
+  H5Dclose(dataset);
+  if (status < 0) throw std::runtime_error(file + ": cannot read " + name);
+  return values;
+}
+
+std::string read_text(hid_t object, const std::string& name) {
+  const hid_t attribute = H5Aopen(object, name.c_str(), H5P_DEFAULT);
+  if (attribute < 0) return {};
+  const hid_t type = H5Aget_type(attribute);
+  std::string value(H5Tget_size(type), '\0');
+  const hid_t memory = H5Tcopy(H5T_C_S1);
+  H5Tset_size(memory, value.size());
+  H5Aread(attribute, memory, value.data());
+  H5Tclose(memory);
+  H5Tclose(type);
+  H5Aclose(attribute);
+  value.resize(value.find('\0') == std::string::npos ? value.size() : value.find('\0'));
+  return value;
+}
+
+double read_number(hid_t object, const std::string& name) {
+  double value = 0;
+  const hid_t attribute = H5Aopen(object, name.c_str(), H5P_DEFAULT);
+  if (attribute < 0) return 0;
+  H5Aread(attribute, H5T_NATIVE_DOUBLE, &value);
+  H5Aclose(attribute);
+  return value;
+}
+
+}  // namespace
+
+Recording read_recording(const std::filesystem::path& path) {
+  quiet_hdf5();
+  const std::string name = path.string();
+  if (!std::filesystem::is_regular_file(path)) throw std::runtime_error(name + ": no such file");
+  const hid_t access = latest_format();
+  hid_t file = H5Fopen(name.c_str(), H5F_ACC_RDONLY | H5F_ACC_SWMR_READ, access);
+  if (file < 0) file = H5Fopen(name.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
+  H5Pclose(access);
+  if (file < 0) throw std::runtime_error(name + ": not a readable HDF5 recording");
+  Recording out;
+  try {
+    out.header.program_version = read_text(file, "program_version");
+    out.header.scene_path = read_text(file, "scene_path");
+    out.header.scene_text = read_text(file, "scene_text");
+    out.header.local_model = read_text(file, "local_model");
+    out.header.hold = read_text(file, "hold");
+    out.header.haptic_rate_hz = read_number(file, "haptic_rate_hz");
+    out.header.ratio = static_cast<int>(read_number(file, "ratio"));
+    const hid_t devices = H5Gopen2(file, "devices", H5P_DEFAULT);
+    if (devices < 0) throw std::runtime_error(name + ": no /devices group (not a Fetouch recording)");
+    H5G_info_t info;
+    H5Gget_info(devices, &info);
+    for (hsize_t i = 0; i < info.nlinks; ++i) {
+      char probe[256] = {0};
+      if (H5Lget_name_by_idx(devices, ".", H5_INDEX_CRT_ORDER, H5_ITER_INC, i, probe, sizeof probe, H5P_DEFAULT) < 0)
+        H5Lget_name_by_idx(devices, ".", H5_INDEX_NAME, H5_ITER_INC, i, probe, sizeof probe, H5P_DEFAULT);
+      const hid_t g = H5Gopen2(devices, probe, H5P_DEFAULT);
+      hsize_t n = 0, m = 0;
+      const auto time = read_all(g, "time_s", 1, &n, name);
+      const auto position = read_all(g, "position_m", 3, &m, name);
+      const auto velocity = read_all(g, "velocity_m_per_s", 3, &m, name);
+      const auto force = read_all(g, "force_n", 3, &m, name);
+      const auto proxy = read_all(g, "proxy_m", 3, &m, name);
+      const auto penetration = read_all(g, "penetration_m", 1, &m, name);
+      const auto normal = read_all(g, "normal_force_n", 1, &m, name);
+      const auto contact = read_all(g, "in_contact", 1, &m, name);
+      H5Gclose(g);
+      // Datasets are extended one after the other: a session killed between two keeps the rows
+      // every dataset has.
+      const std::size_t rows = std::min({time.size(), position.size() / 3, velocity.size() / 3, force.size() / 3,
+                                         proxy.size() / 3, penetration.size(), normal.size(), contact.size()});
+      RecordedDevice d;
+      d.name = probe;
+      d.samples.resize(rows);
+      for (std::size_t r = 0; r < rows; ++r) {
+        DeviceSample& s = d.samples[r];
+        s.time_s = time[r], s.penetration = penetration[r], s.normal_force = normal[r], s.in_contact = contact[r] != 0;
+        for (int k = 0; k < 3; ++k) {
+          s.position[k] = position[3 * r + k], s.velocity[k] = velocity[3 * r + k];
+          s.force[k] = force[3 * r + k], s.proxy[k] = proxy[3 * r + k];
+        }
+      }
+      out.header.probes.push_back(d.name);
+      out.devices.push_back(std::move(d));
+    }
+    H5Gclose(devices);
+    const hid_t frames = H5Gopen2(file, "frames", H5P_DEFAULT);
+    if (frames >= 0) {
+      hsize_t n = 0, m = 0;
+      const auto frame = read_all(frames, "frame", 1, &n, name);
+      const auto time = read_all(frames, "time_s", 1, &m, name);
+      const auto solve = read_all(frames, "solve_s", 1, &m, name);
+      const auto residual = read_all(frames, "residual", 1, &m, name);
+      const auto margin = read_all(frames, "stability_margin", 1, &m, name);
+      const auto iterations = read_all(frames, "newton_iterations", 1, &m, name);
+      const auto converged = read_all(frames, "converged", 1, &m, name);
+      const hsize_t contacts = std::max<hsize_t>(1, out.devices.size());
+      const auto eigenvalues = read_all(frames, "stiffness_eigenvalues_n_per_m", contacts, &m, name);
+      const auto gains = read_all(frames, "gains", 2, &m, name);
+      H5Gclose(frames);
+      const std::size_t rows = std::min({frame.size(), time.size(), solve.size(), residual.size(), margin.size(),
+                                         iterations.size(), converged.size(), std::size_t(eigenvalues.size() / contacts), gains.size() / 2});
+      for (std::size_t r = 0; r < rows; ++r) {
+        FrameRecord f;
+        f.frame = static_cast<long>(frame[r]), f.time_s = time[r], f.solve_s = solve[r], f.residual = residual[r];
+        f.stability_margin = margin[r], f.newton_iterations = static_cast<int>(iterations[r]), f.converged = converged[r] != 0;
+        f.stiffness_eigenvalues.assign(eigenvalues.begin() + static_cast<long>(r * contacts),
+                                       eigenvalues.begin() + static_cast<long>((r + 1) * contacts));
+        f.proportional_gain = gains[2 * r], f.integral_gain = gains[2 * r + 1];
+        out.frames.push_back(f);
+      }
+    }
+  } catch (...) {
+    H5Fclose(file);
+    throw;
+  }
+  H5Fclose(file);
+  return out;
+}
+
+}  // namespace fetouch::app

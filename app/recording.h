@@ -1,0 +1,88 @@
+// A session's recording: one HDF5 file (ARCHITECTURE.md section 6), written by the I/O thread from
+// what the haptic and solver threads hand it, readable again as a replay input.
+//
+// Layout (every dataset chunked and extendable along its first axis):
+//   /                      attributes: program_version, scene_path, scene_text, haptic_rate_hz,
+//                          ratio, local_model, hold, contacts
+//   /devices/<probe>/      one row per haptic tick:
+//       time_s [n]; position_m, velocity_m_per_s, force_n, proxy_m [n x 3];
+//       penetration_m, normal_force_n [n]; in_contact [n] (0/1)
+//   /frames/               one row per solver frame:
+//       frame [n] (int64); time_s, solve_s, residual, stability_margin [n];
+//       newton_iterations [n] (int32); converged [n] (0/1);
+//       stiffness_eigenvalues_n_per_m [n x m] (of the condensed normal stiffness W_n^-1);
+//       gains [n x 2] (Kh, I per tick)
+// The file is written in HDF5's single-writer/multiple-reader mode (SWMR): every flush leaves it
+// consistent on disk, so a session killed at any moment loses only what came after the last flush
+// (the I/O thread flushes at least once a second), and the file can be read while it is written.
+#pragma once
+
+#include <Eigen/Core>
+
+#include <cstdint>
+#include <filesystem>
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace fetouch::app {
+
+struct RecordingHeader {
+  std::string program_version, scene_path, scene_text, local_model, hold;
+  double haptic_rate_hz = 1000;
+  int ratio = 50;
+  std::vector<std::string> probes;  // one device group each, in this order
+};
+
+struct DeviceSample {
+  double time_s = 0;
+  Eigen::Vector3d position = Eigen::Vector3d::Zero(), velocity = Eigen::Vector3d::Zero();
+  Eigen::Vector3d force = Eigen::Vector3d::Zero(), proxy = Eigen::Vector3d::Zero();
+  double penetration = 0, normal_force = 0;
+  bool in_contact = false;
+};
+
+struct FrameRecord {
+  long frame = 0;
+  double time_s = 0, solve_s = 0, residual = 0, stability_margin = 0;
+  int newton_iterations = 0;
+  bool converged = true;
+  std::vector<double> stiffness_eigenvalues;  // m values
+  double proportional_gain = 0, integral_gain = 0;
+};
+
+class RecordingWriter {
+ public:
+  // Creates (replaces) the file. Throws std::runtime_error naming it if it cannot be written.
+  RecordingWriter(const std::filesystem::path& path, const RecordingHeader& header);
+  ~RecordingWriter();
+  RecordingWriter(const RecordingWriter&) = delete;
+  RecordingWriter& operator=(const RecordingWriter&) = delete;
+
+  void append(int device, const DeviceSample* samples, std::size_t count);
+  void append(const FrameRecord& frame);
+  // Everything appended so far reaches the disk, consistently.
+  void flush();
+  long samples(int device) const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+struct RecordedDevice {
+  std::string name;
+  std::vector<DeviceSample> samples;
+};
+
+struct Recording {
+  RecordingHeader header;
+  std::vector<RecordedDevice> devices;
+  std::vector<FrameRecord> frames;
+};
+
+// Reads a recording back (also one still being written, or left by a killed session). Throws
+// std::runtime_error naming the file and what is missing.
+Recording read_recording(const std::filesystem::path& path);
+
+}  // namespace fetouch::app
