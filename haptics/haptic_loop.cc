@@ -24,7 +24,8 @@ HapticLoop::HapticLoop(const HapticLoopSettings& settings, const EnvironmentUpda
   first.gains = settings.gains;
   prepare(first);
   slots_[previous_] = first;
-  slots_[2] = first;  // sized like the others, so filling it never allocates more than once
+  slots_[2] = slots_[3] = first;  // sized like the others, so filling them never allocates more than once
+  published_gains_ = first.gains;
   local_model_.set_gains(first.gains);
   local_model_.set_compliance(first.normal_compliance);
   held_.resize(contacts_);
@@ -34,13 +35,6 @@ HapticLoop::HapticLoop(const HapticLoopSettings& settings, const EnvironmentUpda
   samples_.resize(contacts_);
   outputs_.resize(contacts_);
   safety_.assign(contacts_, ForceSafety(settings.safety));
-}
-
-int HapticLoop::free_slot() const noexcept {
-  for (int s = 0; s < 3; ++s)
-    if (s != newest_ && s != previous_ && s != pending_) return s;
-  // All three in use (an update published and not yet promoted): overwrite the pending one.
-  return pending_;
 }
 
 void HapticLoop::prepare(FrameSlot& slot) const {
@@ -58,7 +52,7 @@ void HapticLoop::prepare(FrameSlot& slot) const {
   problem.ratio = settings_.ratio;
   problem.stiffness = Eigen::LDLT<Eigen::MatrixXd>(slot.normal_compliance).solve(Eigen::MatrixXd::Identity(m, m));
   if (slot.update.damping.size()) problem.damping = normals.transpose() * slot.update.damping * normals;
-  const LocalModelGains start = slots_[newest_].gains;
+  const LocalModelGains start = published_gains_;  // the producer's own: newest_ belongs to the tick
   slot.selection = select_gains(problem, settings_.selection, &start);
   // A selection that finds nothing robustly stable keeps the least unstable gains it saw; the
   // recording shows it (selection.stable) and the safety layer still bounds the force.
@@ -66,9 +60,10 @@ void HapticLoop::prepare(FrameSlot& slot) const {
 }
 
 void HapticLoop::promote() noexcept {
+  // The old previous goes to the middle, the published update comes out of it.
+  const int published = middle_.exchange(previous_, std::memory_order_acq_rel) & kIndex;
   previous_ = newest_;
-  newest_ = pending_;
-  pending_ = -1;
+  newest_ = published;
   newest_arrival_ = tick_count_;
   const FrameSlot& slot = slots_[newest_];
   local_model_.set_compliance(slot.normal_compliance);
@@ -83,7 +78,7 @@ void HapticLoop::promote() noexcept {
 const std::vector<ContactOutput>& HapticLoop::tick(const std::vector<Eigen::Vector3d>& devices) noexcept {
   const int n = settings_.ratio;
   const int i = static_cast<int>(tick_count_ % n);
-  if (i == 0 && tick_count_ > 0 && pending_ >= 0) promote();
+  if (i == 0 && tick_count_ > 0 && (middle_.load(std::memory_order_acquire) & kFresh)) promote();
 
   if (blend_left_ > 0) {
     --blend_left_;

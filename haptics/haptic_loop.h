@@ -22,6 +22,7 @@
 #include <Eigen/Core>
 
 #include <array>
+#include <atomic>
 #include <vector>
 
 #include "haptics/environment.h"
@@ -77,9 +78,16 @@ class HapticLoop {
 
   // Producer side: the slot to fill (update.frames, compliance, ...) with the answer to samples(),
   // then prepare() and publish(). Allocates (gain selection); never call from the tick.
-  FrameSlot& pending_slot() { return slots_[free_slot()]; }
+  // The hand-over is lock-free: four slots, two held by the tick (newest, previous: FOH needs
+  // both), one being filled by the producer, one in the middle; publish() and the promotion at a
+  // frame's first tick each swap a slot index with the middle atomically, so the producer may run
+  // in another thread. Publishing twice before a promotion replaces the first update.
+  FrameSlot& pending_slot() { return slots_[back_]; }
   void prepare(FrameSlot& slot) const;
-  void publish() noexcept { pending_ = free_slot(); }
+  void publish() noexcept {
+    published_gains_ = slots_[back_].gains;
+    back_ = middle_.exchange(back_ | kFresh, std::memory_order_acq_rel) & kIndex;
+  }
 
   int contacts() const { return contacts_; }
   long ticks() const { return tick_count_; }
@@ -89,14 +97,17 @@ class HapticLoop {
   const ForceSafety& safety(int contact) const { return safety_[contact]; }
 
  private:
-  int free_slot() const noexcept;
   void promote() noexcept;
+  static constexpr int kIndex = 3, kFresh = 4;  // middle_: slot index | kFresh while unread
 
   HapticLoopSettings settings_;
   int contacts_;
   LocalModel local_model_;
-  std::array<FrameSlot, 3> slots_;
-  int newest_ = 0, previous_ = 1, pending_ = -1;
+  std::array<FrameSlot, 4> slots_;
+  int newest_ = 0, previous_ = 1;          // the tick's
+  int back_ = 2;                           // the producer's
+  std::atomic<int> middle_{3};             // exchanged
+  LocalModelGains published_gains_;        // the producer's warm start
   long tick_count_ = 0, newest_arrival_ = 0;
   bool decimated_ = false;
 

@@ -6,6 +6,7 @@
 
 #include <cmath>
 #include <cstring>
+#include <thread>
 
 #include "haptics/contact_frame.h"
 #include "haptics/haptic_loop.h"
@@ -282,6 +283,58 @@ TEST(HapticLoop, ForcesSentAreAlwaysFiniteAndClamped) {
     ASSERT_LE(out[0].force.norm(), 3.0 + 1e-12);
   }
   EXPECT_GT(loop.safety(0).clamped_ticks(), 0u);
+}
+
+}  // namespace
+}  // namespace fetouch::haptics
+
+namespace fetouch::haptics {
+namespace {
+
+// The hand-over between a producer thread and the tick, stressed: the producer publishes updates
+// as fast as it can, each stamped in two places (the frame number and the Smith reference force);
+// the tick promotes at every tick (N = 1) and must only ever hold whole updates, in order.
+TEST(HapticLoop, HandOverFromAnotherThreadIsWholeAndInOrder) {
+  HapticLoopSettings settings;
+  settings.ratio = 1;
+  settings.schedule_gains = false;
+  settings.gains = {0.2, 0};
+  EnvironmentUpdate initial;
+  initial.frames.resize(1);
+  initial.frames[0].point = Eigen::Vector3d::Zero();
+  initial.frames[0].normal = Eigen::Vector3d::UnitZ();
+  initial.compliance = Eigen::Matrix3d::Identity() * 1e-3;
+  initial.frame = 0;
+  HapticLoop loop(settings, initial);
+  std::atomic<bool> stop{false};
+  std::atomic<long> published{0};
+  std::thread producer([&] {
+    for (long n = 1; !stop.load(); ++n) {
+      FrameSlot& slot = loop.pending_slot();
+      slot.update.frame = n;
+      slot.normal_force(0) = static_cast<double>(n);
+      loop.prepare(slot);
+      loop.publish();
+      published = n;
+    }
+  });
+  const std::vector<Eigen::Vector3d> device{Eigen::Vector3d(0, 0, 0.001)};
+  long last = 0, torn = 0, backwards = 0, changes = 0;
+  // Until 2000 different updates were held (the producer thread may be scheduled late on a busy
+  // machine), or 50 million ticks.
+  for (long k = 0; k < 50000000 && changes < 2000; ++k) {
+    loop.tick(device);
+    const FrameSlot& held = loop.newest();
+    if (held.update.frame != static_cast<long>(held.normal_force(0)) && held.update.frame != 0) ++torn;
+    if (held.update.frame < last) ++backwards;
+    if (held.update.frame != last) ++changes;
+    last = held.update.frame;
+  }
+  stop = true;
+  producer.join();
+  EXPECT_EQ(torn, 0);
+  EXPECT_EQ(backwards, 0);
+  EXPECT_GE(changes, 2000) << "the producer published " << published.load();
 }
 
 }  // namespace
