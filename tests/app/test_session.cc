@@ -1,0 +1,113 @@
+// The lockstep session (app/session.h) against the haptics module's own lockstep simulation: with
+// an analytic environment the runtime's recorded force series equals, bit for bit, what
+// haptics::LockstepSession renders for the same device points (the runtime adds no timing of its
+// own); two runs record the same forces; the summary agrees with the recording.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstring>
+#include <filesystem>
+
+#include "app/session.h"
+#include "haptics/linear_surface_environment.h"
+
+namespace fetouch::app {
+namespace {
+
+namespace fs = std::filesystem;
+using haptics::ContactFrame;
+
+// Two contacts 3 cm apart on a flat surface, coupled (pressing one moves the other).
+haptics::LinearSurfaceEnvironment two_contacts() {
+  std::vector<ContactFrame> rest(2);
+  rest[0].point = {0, 0, 0}, rest[1].point = {0.03, 0, 0};
+  for (auto& f : rest) f.normal = Eigen::Vector3d::UnitZ(), f.curvature.setZero();
+  Eigen::MatrixXd k0 = Eigen::MatrixXd::Identity(6, 6) * 400;
+  k0(2, 5) = k0(5, 2) = -100;
+  return haptics::LinearSurfaceEnvironment(rest, k0, 0.05 * k0);
+}
+
+// Probe 0 pokes 6 mm deep and back over 1.2 s; probe 1 presses 3 mm and holds.
+std::vector<haptics::Trajectory> paths() {
+  haptics::Trajectory a, b;
+  a.times_s = {0, 0.1, 0.5, 0.9, 1.2};
+  a.positions_m = {Eigen::Vector3d(0, 0, 0.004), Eigen::Vector3d(0, 0, 0.001), Eigen::Vector3d(0, 0, -0.006),
+                   Eigen::Vector3d(0, 0, -0.006), Eigen::Vector3d(0, 0, 0.004)};
+  b.times_s = {0, 0.3, 1.2};
+  b.positions_m = {Eigen::Vector3d(0.03, 0, 0.002), Eigen::Vector3d(0.03, 0, -0.003), Eigen::Vector3d(0.03, 0, -0.003)};
+  return {a, b};
+}
+
+SessionSettings settings(const fs::path& recording) {
+  SessionSettings s;
+  s.loop.local_model = haptics::LocalModelKind::pi;
+  s.loop.hold = haptics::HoldKind::foh;
+  s.loop.ratio = 50;
+  s.probes = {"a", "b"};
+  s.recording = recording;
+  s.header.program_version = "test";
+  return s;
+}
+
+std::vector<std::unique_ptr<haptics::Device>> replays() {
+  std::vector<std::unique_ptr<haptics::Device>> devices;
+  for (const auto& p : paths()) devices.push_back(std::make_unique<haptics::ReplayDevice>(p, 1e-3));
+  return devices;
+}
+
+TEST(LockstepSession, ForcesEqualTheHapticsLockstepBitForBit) {
+  const fs::path file = fs::temp_directory_path() / ("fetouch_session_" + std::to_string(::getpid()) + ".h5");
+  auto environment = two_contacts();
+  auto devices = replays();
+  const SessionSettings s = settings(file);
+  const SessionSummary summary = run_lockstep(environment, devices, s);
+  const Recording r = read_recording(file);
+
+  // The reference: haptics' own lockstep loop on a fresh environment, driven by the same points.
+  auto reference_environment = two_contacts();
+  haptics::HapticLoop loop(s.loop, haptics::initial_update(reference_environment));
+  haptics::LockstepSession reference(loop, reference_environment);
+  const auto a = paths()[0].resampled(1e-3), b = paths()[1].resampled(1e-3);
+  ASSERT_EQ(static_cast<long>(a.size()), summary.ticks);
+  ASSERT_EQ(r.devices[0].samples.size(), a.size());
+  long differing = 0;
+  double largest = 0;
+  for (std::size_t k = 0; k < a.size(); ++k) {
+    const auto& out = reference.tick({a[k], k < b.size() ? b[k] : b.back()});
+    for (int d = 0; d < 2; ++d) {
+      differing += r.devices[d].samples[k].force != out[d].force;
+      largest = std::max(largest, out[d].force.norm());
+    }
+  }
+  EXPECT_EQ(differing, 0);
+  EXPECT_GT(largest, 1.0);  // the poke does press
+  EXPECT_EQ(summary.max_force_n, largest);
+  EXPECT_EQ(summary.frames, static_cast<long>((a.size() - 1) / 50));
+  EXPECT_EQ(static_cast<long>(r.frames.size()), summary.frames);
+  EXPECT_GT(summary.min_stability_margin, 0);
+  EXPECT_EQ(summary.newton_failures, 0);
+  fs::remove(file);
+}
+
+TEST(LockstepSession, TwoRunsRecordTheSameForces) {
+  std::vector<Recording> runs;
+  for (int run = 0; run < 2; ++run) {
+    const fs::path file = fs::temp_directory_path() / ("fetouch_session_twice_" + std::to_string(run) + ".h5");
+    auto environment = two_contacts();
+    auto devices = replays();
+    run_lockstep(environment, devices, settings(file));
+    runs.push_back(read_recording(file));
+    fs::remove(file);
+  }
+  for (int d = 0; d < 2; ++d) {
+    ASSERT_EQ(runs[0].devices[d].samples.size(), runs[1].devices[d].samples.size());
+    for (std::size_t k = 0; k < runs[0].devices[d].samples.size(); ++k)
+      ASSERT_EQ(std::memcmp(runs[0].devices[d].samples[k].force.data(), runs[1].devices[d].samples[k].force.data(),
+                            3 * sizeof(double)),
+                0)
+          << "device " << d << " tick " << k;
+  }
+}
+
+}  // namespace
+}  // namespace fetouch::app
