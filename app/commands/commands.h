@@ -15,5 +15,6 @@ void add_phantom_command(CLI::App& parent, int& exit_code);
 void add_reconstruct_command(CLI::App& parent, int& exit_code);
 void add_mesh_command(CLI::App& parent, int& exit_code);
 void add_render_command(CLI::App& parent, int& exit_code);
+void add_replay_command(CLI::App& parent, int& exit_code);
 
 }  // namespace fetouch::app

@@ -1,0 +1,249 @@
+// `fetouch replay`: a scene's probes moved by their devices without hardware (replay of a
+// trajectory, or the virtual operator pulled along it), rendered by the 1 kHz loop against the FEM
+// tissue in lockstep (app/session.h), recorded to HDF5 with a summary.
+#include <CLI/CLI.hpp>
+#include <deal.II/grid/tria.h>
+
+#include <chrono>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <limits>
+#include <memory>
+#include <sstream>
+
+#include "app/build_info.h"
+#include "app/commands/commands.h"
+#include "app/exit_codes.h"
+#include "app/json_writer.h"
+#include "app/log.h"
+#include "app/mpi_session.h"
+#include "app/recording.h"
+#include "app/scene_mesh.h"
+#include "app/session.h"
+#include "config/scene_loader.h"
+#include "fem/fem_environment.h"
+#include "fem/tissue_model.h"
+
+namespace fetouch::app {
+
+namespace {
+
+namespace fs = std::filesystem;
+
+struct ReplayOptions {
+  std::string scene, trajectory, clock = "lockstep", out = "fetouch-replay";
+  bool json = false;
+};
+
+// The point of the tissue's boundary nearest to p (over its boundary faces, each split into
+// triangles): where a probe starting at p first touches, for a probe coming straight at it.
+Eigen::Vector3d nearest_boundary_point(const dealii::Triangulation<3>& tria, const Eigen::Vector3d& p) {
+  const auto closest_on_triangle = [&](const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Vector3d& c) {
+    // Ericson, Real-Time Collision Detection, 5.1.5: by Voronoi regions of the triangle.
+    const Eigen::Vector3d ab = b - a, ac = c - a, ap = p - a;
+    const double d1 = ab.dot(ap), d2 = ac.dot(ap);
+    if (d1 <= 0 && d2 <= 0) return a;
+    const Eigen::Vector3d bp = p - b;
+    const double d3 = ab.dot(bp), d4 = ac.dot(bp);
+    if (d3 >= 0 && d4 <= d3) return b;
+    const double vc = d1 * d4 - d3 * d2;
+    if (vc <= 0 && d1 >= 0 && d3 <= 0) return Eigen::Vector3d(a + d1 / (d1 - d3) * ab);
+    const Eigen::Vector3d cp = p - c;
+    const double d5 = ab.dot(cp), d6 = ac.dot(cp);
+    if (d6 >= 0 && d5 <= d6) return c;
+    const double vb = d5 * d2 - d1 * d6;
+    if (vb <= 0 && d2 >= 0 && d6 <= 0) return Eigen::Vector3d(a + d2 / (d2 - d6) * ac);
+    const double va = d3 * d6 - d5 * d4;
+    if (va <= 0 && d4 - d3 >= 0 && d5 - d6 >= 0)
+      return Eigen::Vector3d(b + (d4 - d3) / ((d4 - d3) + (d5 - d6)) * (c - b));
+    const double denominator = 1 / (va + vb + vc);
+    return Eigen::Vector3d(a + ab * vb * denominator + ac * vc * denominator);
+  };
+  double best = std::numeric_limits<double>::infinity();
+  Eigen::Vector3d answer = p;
+  for (const auto& cell : tria.active_cell_iterators())
+    for (const unsigned int f : cell->face_indices()) {
+      if (!cell->face(f)->at_boundary()) continue;
+      const auto face = cell->face(f);
+      std::vector<Eigen::Vector3d> v;
+      for (const unsigned int k : face->vertex_indices()) {
+        const auto& x = face->vertex(k);
+        v.emplace_back(x[0], x[1], x[2]);
+      }
+      // A quadrilateral's vertices are in lexicographic order (0 1 / 2 3): triangles 0 1 3, 0 3 2.
+      std::vector<std::array<int, 3>> triangles{{0, 1, 2}};
+      if (v.size() == 4) triangles = {{0, 1, 3}, {0, 3, 2}};
+      for (const auto& t : triangles) {
+        const Eigen::Vector3d q = closest_on_triangle(v[t[0]], v[t[1]], v[t[2]]);
+        if ((q - p).squaredNorm() < best) best = (q - p).squaredNorm(), answer = q;
+      }
+    }
+  return answer;
+}
+
+haptics::HapticLoopSettings loop_settings(const config::Scene& scene) {
+  const config::Haptics& h = scene.haptics;
+  haptics::HapticLoopSettings s;
+  static const haptics::LocalModelKind models[] = {haptics::LocalModelKind::p, haptics::LocalModelKind::pi,
+                                                   haptics::LocalModelKind::smith, haptics::LocalModelKind::pi_smith};
+  s.local_model = models[static_cast<int>(h.local_model)];
+  s.hold = h.hold == config::HoldType::foh ? haptics::HoldKind::foh : haptics::HoldKind::zoh;
+  s.ratio = h.ratio(scene.solver);
+  s.period_s = 1 / h.rate_hz;
+  s.schedule_gains = h.automatic_gains;
+  s.gains = {h.proportional_n_per_m, h.integral_n_per_m};
+  s.selection.margin = h.robustness_margin;
+  s.safety.max_force_n = h.max_force_n;
+  s.safety.max_force_rate_n_per_s = h.max_force_rate_n_per_s;
+  s.safety.period_s = s.period_s;
+  s.safety.watchdog_timeout_s = h.watchdog_timeout_s;
+  return s;
+}
+
+haptics::Trajectory probe_trajectory(const config::Probe& probe, int index, const ReplayOptions& o) {
+  const fs::path file = (index == 0 && !o.trajectory.empty()) ? fs::path(o.trajectory) : probe.device.trajectory;
+  if (file.empty()) throw std::runtime_error("probe " + probe.name + " has no trajectory (device.trajectory)");
+  if (file.extension() == ".h5") {
+    // A recording: this probe's positions (by name, else by order).
+    const Recording r = read_recording(file);
+    const RecordedDevice* d = nullptr;
+    for (const auto& device : r.devices)
+      if (device.name == probe.name) d = &device;
+    if (!d && index < static_cast<int>(r.devices.size())) d = &r.devices[index];
+    if (!d || d->samples.size() < 2) throw std::runtime_error(file.string() + ": no positions for probe " + probe.name);
+    haptics::Trajectory t;
+    for (const auto& s : d->samples) t.times_s.push_back(s.time_s), t.positions_m.push_back(s.position);
+    return t;
+  }
+  return haptics::read_trajectory_csv(file);
+}
+
+void write_summary(std::ostream& out, const ReplayOptions& o, const config::Scene& scene, const SessionSummary& s,
+                   const fs::path& recording, double seconds) {
+  JsonWriter json(out);
+  json.begin_object();
+  json.key("scene").value(scene.name);
+  json.key("clock").value(o.clock);
+  json.key("recording").value(recording.string());
+  json.key("ticks").value(s.ticks);
+  json.key("frames").value(s.frames);
+  json.key("solve_s").begin_object();
+  json.key("p50").value(s.solve_p50_s);
+  json.key("p99").value(s.solve_p99_s);
+  json.key("max").value(s.solve_max_s);
+  json.end_object();
+  json.key("overruns").value(0L);  // lockstep: the solver always finishes within its frame
+  json.key("newton_failures").value(s.newton_failures);
+  json.key("max_force_n").value(s.max_force_n);
+  json.key("min_stability_margin").value(s.min_stability_margin);
+  json.key("frames_with_unstable_gains").value(s.frames_with_unstable_gains);
+  json.key("wall_s").value(seconds);
+  json.end_object();
+  out << "\n";
+}
+
+int run_replay(const ReplayOptions& o) {
+  const auto start = std::chrono::steady_clock::now();
+  if (o.clock != "lockstep") {
+    std::cerr << "error: --clock " << o.clock << ": only the lockstep clock is built so far\n";
+    return kExitBadInput;
+  }
+  config::Scene scene;
+  try {
+    scene = config::load_scene(o.scene).scene;
+  } catch (const config::SceneError& error) {
+    for (const auto& d : error.diagnostics()) std::cerr << d.format() << "\n";
+    return kExitBadInput;
+  }
+  if (scene.probes.empty()) {
+    std::cerr << "error: " << o.scene << ": the scene has no probes to replay\n";
+    return kExitBadInput;
+  }
+  ensure_mpi();
+  const fs::path out(o.out), recording = fs::path(o.out) / "recording.h5";
+  SessionSummary summary;
+  try {
+    scene.mesh = mesh_scene_volume(scene.mesh);
+    log::info() << "building the tissue model of " << scene.name;
+    std::unique_ptr<fem::TissueModel> model = fem::build_tissue_model(scene);
+    const haptics::HapticLoopSettings settings = loop_settings(scene);
+    std::vector<std::unique_ptr<haptics::Device>> devices;
+    SessionSettings session;
+    session.loop = settings;
+    for (int p = 0; p < static_cast<int>(scene.probes.size()); ++p) {
+      const config::Probe& probe = scene.probes[p];
+      const haptics::Trajectory path = probe_trajectory(probe, p, o);
+      const Eigen::Vector3d touch = nearest_boundary_point(model->triangulation, path.positions_m.front());
+      log::detail() << "probe " << probe.name << ": contact patch at (" << touch.transpose() << ") m";
+      model->solver->add_contact_patch(dealii::Point<3>(touch[0], touch[1], touch[2]), probe.radius_m);
+      switch (probe.device.type) {
+        case config::DeviceType::replay:
+          devices.push_back(std::make_unique<haptics::ReplayDevice>(path, settings.period_s));
+          break;
+        case config::DeviceType::operator_model: {
+          const auto& h = probe.device.hand;
+          devices.push_back(std::make_unique<haptics::VirtualOperator>(
+              path, haptics::HandParameters{h.mass_kg, h.stiffness_n_per_m, h.damping_n_s_per_m}, settings.period_s));
+          break;
+        }
+        default:
+          throw std::runtime_error("probe " + probe.name + ": a " + std::string(config::to_string(probe.device.type)) +
+                                   " device needs hardware; replay uses replay or operator devices");
+      }
+      session.probes.push_back(probe.name);
+    }
+    fs::create_directories(out);
+    session.recording = recording;
+    session.header.program_version = std::string("fetouch ") + kVersion + " (" + kGitRevision + ")";
+    session.header.scene_path = scene.source.string();
+    session.header.scene_text = scene.text;
+    session.header.local_model = config::to_string(scene.haptics.local_model);
+    session.header.hold = config::to_string(scene.haptics.hold);
+    fem::FemEnvironment environment(std::move(model->solver), model->newton);
+    log::info() << "replaying " << scene.probes.size() << " probe(s) in lockstep, N = " << settings.ratio;
+    summary = run_lockstep(environment, devices, session);
+  } catch (const std::exception& e) {
+    std::cerr << "error: " << o.scene << ": " << e.what() << "\n";
+    return kExitBadInput;
+  }
+  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  std::ostringstream text;
+  write_summary(text, o, scene, summary, recording, seconds);
+  std::ofstream(out / "summary.json") << text.str();
+  if (o.json) {
+    std::cout << text.str();
+  } else {
+    std::printf("%ld ticks (%.2f s simulated), %ld frames in %.1f s; solve p50 %.1f ms, p99 %.1f ms, max %.1f ms\n",
+                summary.ticks, summary.ticks / scene.haptics.rate_hz,
+                summary.frames, seconds, 1e3 * summary.solve_p50_s, 1e3 * summary.solve_p99_s, 1e3 * summary.solve_max_s);
+    std::printf("  max force %.3f N, smallest stability margin %.3f, %ld Newton failures\n", summary.max_force_n,
+                summary.min_stability_margin, summary.newton_failures);
+    std::printf("  wrote %s and %s\n", recording.string().c_str(), (out / "summary.json").string().c_str());
+  }
+  return kExitOk;
+}
+
+}  // namespace
+
+void add_replay_command(CLI::App& parent, int& exit_code) {
+  auto o = std::make_shared<ReplayOptions>();
+  CLI::App* cmd = parent.add_subcommand("replay", "Replay a scene's probe trajectories against the tissue, headless");
+  cmd->footer(
+      "Moves each probe with its device (replay: the trajectory as recorded; operator: a hand model\n"
+      "pulled along it), renders the force at the haptic rate through the scene's local model and\n"
+      "hold, and solves the tissue once per frame in lockstep (simulated time: the same inputs give\n"
+      "the same forces, bit for bit). Writes DIR/recording.h5 (HDF5: per-tick device series,\n"
+      "per-frame solver figures) and DIR/summary.json. Each probe's contact patch sits on the tissue\n"
+      "point nearest its trajectory's start.");
+  cmd->add_option("scene", o->scene, "Scene file (.yaml)")->required()->check(CLI::ExistingFile);
+  cmd->add_option("--trajectory", o->trajectory, "The first probe's trajectory instead of the scene's (CSV t,x,y,z or a recording .h5)")
+      ->check(CLI::ExistingFile);
+  cmd->add_option("--clock", o->clock, "lockstep (simulated time)")->check(CLI::IsMember({"lockstep", "realtime"}))
+      ->capture_default_str();
+  cmd->add_option("--out", o->out, "Output folder")->capture_default_str();
+  cmd->add_flag("--json", o->json, "Print the summary as JSON on stdout");
+  cmd->callback([o, &exit_code]() { exit_code = run_replay(*o); });
+}
+
+}  // namespace fetouch::app

@@ -1,0 +1,78 @@
+// `fetouch replay`, the real binary on the shipped block scene in lockstep: the recording reopens
+// with every tick; two runs give the same force series bit for bit; forces stay finite and under
+// the scene's maximum; and at the end of the poke's hold the rendered force is the one the FEM
+// equilibrium needs for that indentation (`fetouch solve` with that force moves the surface by the
+// depth the probe holds, a second, independent route through the solver).
+#include <gtest/gtest.h>
+#include <yaml-cpp/yaml.h>
+
+#include <cmath>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+
+#include "app/recording.h"
+#include "tests/support/run_command.h"
+
+namespace fetouch::testing {
+namespace {
+
+namespace fs = std::filesystem;
+
+TEST(ReplayCommand, BlockPokeIsReproducibleAndMatchesTheStaticSolve) {
+  const fs::path dir = fs::temp_directory_path() / ("fetouch_replay_" + std::to_string(::getpid()));
+  fs::remove_all(dir);
+  const std::string scene = std::string(FETOUCH_SOURCE_DIR) + "/config/scenes/block_press.yaml";
+  std::vector<app::Recording> runs;
+  for (const char* name : {"a", "b"}) {
+    const auto r = run_command(fetouch("replay --json --out " + (dir / name).string() + " " + scene));
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    const YAML::Node j = YAML::Load(r.out);
+    EXPECT_EQ(j["ticks"].as<long>(), 3001);  // 3 s at 1 kHz, both ends
+    EXPECT_EQ(j["frames"].as<long>(), 60);
+    EXPECT_EQ(j["newton_failures"].as<long>(), 0);
+    EXPECT_GT(j["min_stability_margin"].as<double>(), 0);
+    EXPECT_LE(j["max_force_n"].as<double>(), 3.3);
+    runs.push_back(app::read_recording(dir / name / "recording.h5"));
+  }
+  const auto& a = runs[0].devices.at(0).samples;
+  const auto& b = runs[1].devices.at(0).samples;
+  ASSERT_EQ(a.size(), 3001u);
+  ASSERT_EQ(b.size(), a.size());
+  for (std::size_t k = 0; k < a.size(); ++k) {
+    ASSERT_EQ(std::memcmp(a[k].force.data(), b[k].force.data(), 3 * sizeof(double)), 0) << "tick " << k;
+    ASSERT_TRUE(a[k].force.allFinite());
+  }
+  EXPECT_NE(runs[0].header.scene_text.find("block_press"), std::string::npos);
+
+  // End of the hold (t = 2 s): the probe 8 mm below the top face; the force rendered then, applied
+  // statically at the same place, must move the surface by about as much (the PI model drives the
+  // penetration to zero; the patch spreads the load over the probe's radius).
+  const auto& held = a[2000];
+  ASSERT_TRUE(held.in_contact);
+  const double force = held.force.z();  // on the device: up
+  ASSERT_GT(force, 0.3);
+  const auto s = run_command(fetouch("solve --json --out " + (dir / "static").string() + " " + scene +
+                                     " --press 0.05 0.04 0.05 0 0 " + std::to_string(-force)));
+  ASSERT_EQ(s.exit_code, 0) << s.err;
+  const YAML::Node j = YAML::Load(s.out);
+  const double sag = -j["probes"][0]["displacement_m"][2].as<double>();
+  std::printf("held force %.4f N; static solve with it: the patch moves %.3f mm (the probe holds 8 mm)\n", force, 1e3 * sag);
+  EXPECT_NEAR(sag, 0.008, 0.0008);
+  fs::remove_all(dir);
+}
+
+TEST(ReplayCommand, BadRequestsAreRefused) {
+  const std::string scene = std::string(FETOUCH_SOURCE_DIR) + "/config/scenes/block_press.yaml";
+  const auto realtime = run_command(fetouch("replay --clock realtime --out /tmp/x " + scene));
+  EXPECT_EQ(realtime.exit_code, 2);
+  const fs::path bad = fs::temp_directory_path() / ("fetouch_bad_traj_" + std::to_string(::getpid()) + ".csv");
+  { std::ofstream(bad) << "t,x,y,z\n0,0,0,0\n1,0,0\n"; }
+  const auto broken = run_command(fetouch("replay --trajectory " + bad.string() + " --out /tmp/x " + scene));
+  EXPECT_EQ(broken.exit_code, 2);
+  EXPECT_NE(broken.err.find(bad.string() + ":3:"), std::string::npos) << broken.err;
+  fs::remove(bad);
+}
+
+}  // namespace
+}  // namespace fetouch::testing
