@@ -115,6 +115,7 @@ SessionSummary run_lockstep(haptics::Environment& environment, std::vector<std::
       }
       ++summary.frames;
       if (writer) writer->append(f);
+      if (settings.after_frame) settings.after_frame(f.frame, k * period);
     }
     if (filled == batch) drain();
   }

@@ -6,6 +6,7 @@
 #pragma once
 
 #include <filesystem>
+#include <functional>
 #include <memory>
 #include <optional>
 #include <string>
@@ -25,6 +26,8 @@ struct SessionSettings {
   RecordingHeader header;                   // probes, rate and ratio are filled in here
   double flush_period_s = 0.5;              // wall-clock time between flushes of the recording
   long max_ticks = -1;                      // < 0: until every device has finished
+  // Called after each frame's update is taken up (outside the tick): frame number, time.
+  std::function<void(long, double)> after_frame;
 };
 
 struct SessionSummary {

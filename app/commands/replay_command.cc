@@ -18,6 +18,7 @@
 #include "app/json_writer.h"
 #include "app/log.h"
 #include "app/mpi_session.h"
+#include "app/pvd.h"
 #include "app/recording.h"
 #include "app/scene_mesh.h"
 #include "app/session.h"
@@ -33,6 +34,7 @@ namespace fs = std::filesystem;
 
 struct ReplayOptions {
   std::string scene, trajectory, clock = "lockstep", out = "fetouch-replay";
+  int mesh_every = 10;  // frames between deformed meshes (0: none)
   bool json = false;
 };
 
@@ -201,8 +203,23 @@ int run_replay(const ReplayOptions& o) {
     session.header.local_model = config::to_string(scene.haptics.local_model);
     session.header.hold = config::to_string(scene.haptics.hold);
     fem::FemEnvironment environment(std::move(model->solver), model->newton);
+    // The deformed tissue every mesh_every frames (and at rest), as VTU files listed in a PVD.
+    std::vector<std::pair<double, std::string>> meshes;
+    const auto write_mesh = [&](long frame, double time_s) {
+      const std::string name = "mesh/" + scene.name + "_" + std::to_string(frame) + ".vtu";
+      environment.solver().write_vtu((out / name).string());
+      meshes.emplace_back(time_s, name);
+    };
+    if (o.mesh_every > 0) {
+      fs::create_directories(out / "mesh");
+      write_mesh(0, 0);
+      session.after_frame = [&](long frame, double time_s) {
+        if ((frame + 1) % o.mesh_every == 0) write_mesh(frame + 1, time_s);
+      };
+    }
     log::info() << "replaying " << scene.probes.size() << " probe(s) in lockstep, N = " << settings.ratio;
     summary = run_lockstep(environment, devices, session);
+    if (!meshes.empty()) write_pvd(out / (scene.name + ".pvd"), meshes);
   } catch (const std::exception& e) {
     std::cerr << "error: " << o.scene << ": " << e.what() << "\n";
     return kExitBadInput;
@@ -219,7 +236,9 @@ int run_replay(const ReplayOptions& o) {
                 summary.frames, seconds, 1e3 * summary.solve_p50_s, 1e3 * summary.solve_p99_s, 1e3 * summary.solve_max_s);
     std::printf("  max force %.3f N, smallest stability margin %.3f, %ld Newton failures\n", summary.max_force_n,
                 summary.min_stability_margin, summary.newton_failures);
-    std::printf("  wrote %s and %s\n", recording.string().c_str(), (out / "summary.json").string().c_str());
+    std::printf("  wrote %s, %s", recording.string().c_str(), (out / "summary.json").string().c_str());
+    if (o.mesh_every > 0) std::printf(" and %s (open in ParaView)", (out / (scene.name + ".pvd")).string().c_str());
+    std::printf("\n");
   }
   return kExitOk;
 }
@@ -234,14 +253,18 @@ void add_replay_command(CLI::App& parent, int& exit_code) {
       "pulled along it), renders the force at the haptic rate through the scene's local model and\n"
       "hold, and solves the tissue once per frame in lockstep (simulated time: the same inputs give\n"
       "the same forces, bit for bit). Writes DIR/recording.h5 (HDF5: per-tick device series,\n"
-      "per-frame solver figures) and DIR/summary.json. Each probe's contact patch sits on the tissue\n"
-      "point nearest its trajectory's start.");
+      "per-frame solver figures), DIR/summary.json and the deformed tissue every --mesh-every frames\n"
+      "(DIR/mesh/*.vtu listed in DIR/SCENE.pvd: open it in ParaView, Warp By Vector). Each probe's\n"
+      "contact patch sits on the tissue point nearest its trajectory's start.");
   cmd->add_option("scene", o->scene, "Scene file (.yaml)")->required()->check(CLI::ExistingFile);
   cmd->add_option("--trajectory", o->trajectory, "The first probe's trajectory instead of the scene's (CSV t,x,y,z or a recording .h5)")
       ->check(CLI::ExistingFile);
   cmd->add_option("--clock", o->clock, "lockstep (simulated time)")->check(CLI::IsMember({"lockstep", "realtime"}))
       ->capture_default_str();
   cmd->add_option("--out", o->out, "Output folder")->capture_default_str();
+  cmd->add_option("--mesh-every", o->mesh_every, "Frames between deformed meshes written (0: none)")
+      ->check(CLI::NonNegativeNumber)
+      ->capture_default_str();
   cmd->add_flag("--json", o->json, "Print the summary as JSON on stdout");
   cmd->callback([o, &exit_code]() { exit_code = run_replay(*o); });
 }

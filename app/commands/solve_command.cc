@@ -21,6 +21,7 @@
 #include "app/log.h"
 #include "app/scene_mesh.h"
 #include "app/mpi_session.h"
+#include "app/pvd.h"
 #include "app/progress.h"
 #include "config/scene_loader.h"
 #include "fem/tissue_model.h"
@@ -272,12 +273,7 @@ int run_solve(const SolveOptions& o) {
   if (rank != 0) return report.converged ? kExitOk : kExitFailure;
   try {
     if (!frames.empty()) {  // the time series of a dynamic case, or the one state
-      std::ofstream p(pvd);
-      p << "<?xml version=\"1.0\"?>\n<VTKFile type=\"Collection\" version=\"0.1\">\n  <Collection>\n";
-      for (const auto& [t, file] : frames)
-        p << "    <DataSet timestep=\"" << t << "\" group=\"\" part=\"0\" file=\"" << file << "\"/>\n";
-      p << "  </Collection>\n</VTKFile>\n";
-      if (!p) throw std::runtime_error("cannot write " + pvd.string());
+      write_pvd(pvd, frames);
     }
     std::ofstream s(summary);
     s << json.str();

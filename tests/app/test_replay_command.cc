@@ -4,7 +4,15 @@
 // equilibrium needs for that indentation (`fetouch solve` with that force moves the surface by the
 // depth the probe holds, a second, independent route through the solver).
 #include <gtest/gtest.h>
+#include <vtkDataArray.h>
+#include <vtkNew.h>
+#include <vtkPointData.h>
+#include <vtkUnstructuredGrid.h>
+#include <vtkXMLUnstructuredGridReader.h>
 #include <yaml-cpp/yaml.h>
+
+#include <algorithm>
+#include <iterator>
 
 #include <cmath>
 #include <cstring>
@@ -18,6 +26,25 @@ namespace fetouch::testing {
 namespace {
 
 namespace fs = std::filesystem;
+
+std::string app_read(const fs::path& path) {
+  std::ifstream in(path);
+  return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+}
+
+double largest_displacement(const fs::path& vtu) {
+  vtkNew<vtkXMLUnstructuredGridReader> reader;
+  reader->SetFileName(vtu.string().c_str());
+  reader->Update();
+  vtkDataArray* u = reader->GetOutput()->GetPointData()->GetArray("displacement");
+  if (!u) return -1;
+  double largest = 0;
+  for (vtkIdType i = 0; i < u->GetNumberOfTuples(); ++i) {
+    const double* d = u->GetTuple3(i);
+    largest = std::max(largest, std::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]));
+  }
+  return largest;
+}
 
 TEST(ReplayCommand, BlockPokeIsReproducibleAndMatchesTheStaticSolve) {
   const fs::path dir = fs::temp_directory_path() / ("fetouch_replay_" + std::to_string(::getpid()));
@@ -50,15 +77,31 @@ TEST(ReplayCommand, BlockPokeIsReproducibleAndMatchesTheStaticSolve) {
   // penetration to zero; the patch spreads the load over the probe's radius).
   const auto& held = a[2000];
   ASSERT_TRUE(held.in_contact);
-  const double force = held.force.z();  // on the device: up
+  // The force on the tissue as the loop handed it over: the local model's normal force along the
+  // held normal (the device's force is the same direction, after the safety layer).
+  const double force = held.normal_force;
   ASSERT_GT(force, 0.3);
-  const auto s = run_command(fetouch("solve --json --out " + (dir / "static").string() + " " + scene +
-                                     " --press 0.05 0.04 0.05 0 0 " + std::to_string(-force)));
+  const Eigen::Vector3d on_tissue = -force * held.force.normalized();
+  char press[160];
+  std::snprintf(press, sizeof press, " --press 0.05 0.04 0.05 %.17g %.17g %.17g", on_tissue.x(), on_tissue.y(), on_tissue.z());
+  const auto s = run_command(fetouch("solve --json --out " + (dir / "static").string() + " " + scene + press));
   ASSERT_EQ(s.exit_code, 0) << s.err;
   const YAML::Node j = YAML::Load(s.out);
   const double sag = -j["probes"][0]["displacement_m"][2].as<double>();
   std::printf("held force %.4f N; static solve with it: the patch moves %.3f mm (the probe holds 8 mm)\n", force, 1e3 * sag);
   EXPECT_NEAR(sag, 0.008, 0.0008);
+
+  // The deformed meshes, as ParaView opens them. The one at t = 2 s is the tissue's answer to the
+  // samples of tick 2000, i.e. to the force above: reached frame by frame from the previous state,
+  // it must be the static solve's state (hyperelastic equilibrium does not depend on the path),
+  // read back by VTK from both files. The one at rest is undeformed.
+  const std::string pvd = app_read(dir / "a" / "block_press.pvd");
+  ASSERT_NE(pvd.find("mesh/block_press_40.vtu"), std::string::npos) << pvd;
+  const double replayed = largest_displacement(dir / "a" / "mesh" / "block_press_40.vtu");
+  const double solved = largest_displacement(dir / "static" / "block_press.vtu");
+  std::printf("largest displacement: replay frame 40 %.4f mm, static solve %.4f mm\n", 1e3 * replayed, 1e3 * solved);
+  EXPECT_NEAR(replayed, solved, 1e-4 * solved);
+  EXPECT_EQ(largest_displacement(dir / "a" / "mesh" / "block_press_0.vtu"), 0);
   fs::remove_all(dir);
 }
 
