@@ -10,6 +10,7 @@
 #include <stdexcept>
 
 #include "app/log.h"
+#include "imaging/phantom.h"
 #include "imaging/segmentation.h"
 #include "imaging/volume_io.h"
 #include "meshes/volume_mesher.h"
@@ -26,10 +27,13 @@ std::string cache_key(const config::MeshSpec& spec) {
   key.precision(17);
   const auto& m = spec.meshing;
   std::error_code ec;
-  key << fs::absolute(spec.path).string() << '|';
-  if (fs::is_regular_file(spec.path, ec)) {
+  if (spec.source == config::MeshSource::phantom) {
+    key << "phantom|" << spec.phantom.seed << '|' << spec.phantom.spacing_m;
+  } else if (fs::is_regular_file(spec.path, ec)) {
+    key << fs::absolute(spec.path).string() << '|';
     key << fs::file_size(spec.path, ec) << '|' << fs::last_write_time(spec.path, ec).time_since_epoch().count();
   } else {
+    key << fs::absolute(spec.path).string() << '|';
     for (const auto& entry : fs::directory_iterator(spec.path, ec))
       key << entry.path().filename().string() << ':' << entry.last_write_time(ec).time_since_epoch().count() << ',';
   }
@@ -44,9 +48,23 @@ std::string cache_key(const config::MeshSpec& spec) {
 
 void mesh_into(const config::MeshSpec& spec, const fs::path& file) {
   const auto& m = spec.meshing;
-  log::info() << "meshing the scene's volume " << spec.path.string() << " (once; cached as " << file.string() << ")";
   const auto start = std::chrono::steady_clock::now();
-  const imaging::Volume<float> volume = imaging::read_volume(spec.path);
+  imaging::Volume<float> volume;
+  if (spec.source == config::MeshSource::phantom) {
+    log::info() << "meshing the scene's phantom (seed " << spec.phantom.seed << "; once, cached as " << file.string() << ")";
+    imaging::PhantomSettings p;
+    p.seed = static_cast<std::uint32_t>(spec.phantom.seed);
+    p.spacing_mm = spec.phantom.spacing_m * 1e3;
+    p.speckle = false;  // only the labels are meshed
+    const imaging::Phantom phantom = imaging::make_phantom(p);
+    const auto& l = phantom.labels;
+    volume.dimensions = l.dimensions, volume.spacing_mm = l.spacing_mm, volume.origin_mm = l.origin_mm;
+    volume.direction = l.direction;
+    volume.data.assign(l.data.begin(), l.data.end());
+  } else {
+    log::info() << "meshing the scene's volume " << spec.path.string() << " (once; cached as " << file.string() << ")";
+    volume = imaging::read_volume(spec.path);
+  }
   imaging::TissueSegmentation segmentation;
   segmentation.labels = m.labels, segmentation.fetus = m.fetus, segmentation.closing = m.closing_voxels;
   segmentation.smoothing_mm = m.smoothing_sigma_m * 1e3;
@@ -87,7 +105,7 @@ fs::path mesh_cache_dir() {
 }
 
 config::MeshSpec mesh_scene_volume(const config::MeshSpec& spec) {
-  if (spec.source != config::MeshSource::volume) return spec;
+  if (spec.source != config::MeshSource::volume && spec.source != config::MeshSource::phantom) return spec;
   std::ostringstream name;
   name << "mesh-" << std::hex << std::hash<std::string>{}(cache_key(spec)) << ".vtu";
   const fs::path file = mesh_cache_dir() / "meshes" / name.str();
@@ -105,7 +123,8 @@ config::MeshSpec mesh_scene_volume(const config::MeshSpec& spec) {
   }
   if (ranks > 1) MPI_Bcast(&ok, 1, MPI_INT, 0, MPI_COMM_WORLD);
   if (!ok)
-    throw std::runtime_error(spec.path.string() + ": could not be meshed: " + (rank == 0 ? failure : "(see rank 0)"));
+    throw std::runtime_error((spec.source == config::MeshSource::phantom ? std::string("the phantom") : spec.path.string()) +
+                             ": could not be meshed: " + (rank == 0 ? failure : "(see rank 0)"));
   if (rank == 0 && fs::exists(file)) log::detail() << "the scene's volume mesh: " << file.string();
   config::MeshSpec out = spec;
   out.source = config::MeshSource::file;

@@ -1,4 +1,5 @@
-// A scene whose tissue is an ultrasound volume (mesh.volume) is meshed here, by the same pipeline
+// A scene whose tissue is an ultrasound volume (mesh.volume) or the synthetic phantom
+// (mesh.phantom, generated in memory) is meshed here, by the same pipeline
 // as `fetouch mesh` (imaging/segmentation.h, meshes/volume_mesher.h), before the solver reads it.
 // The mesh is kept in a cache keyed by the volume (path, size, time) and the meshing options, so a
 // scene is meshed once: $FETOUCH_CACHE_DIR, else $XDG_CACHE_HOME/fetouch, else ~/.cache/fetouch,
@@ -12,7 +13,7 @@
 
 namespace fetouch::app {
 
-// The spec unchanged unless it is a volume; then a `file` spec of the cached .vtu (meshed now if
+// The spec unchanged unless it is a volume or the phantom; then a `file` spec of the cached .vtu (meshed now if
 // not cached). Throws std::runtime_error naming the volume and what failed.
 config::MeshSpec mesh_scene_volume(const config::MeshSpec& spec);
 

@@ -23,7 +23,7 @@ struct SourceLocation {
 
 // ---- mesh ---------------------------------------------------------------------------------------
 
-enum class MeshSource { file, volume, generated };
+enum class MeshSource { file, volume, phantom, generated };
 enum class ElementType { p1, p2, q1, q2 };  // P: tetrahedra (simplex), Q: hexahedra
 enum class GeneratedShape { box, ball, shell };
 enum class SmoothingFilter { none, gaussian, median };
@@ -54,10 +54,17 @@ struct GeneratedMesh {
   int refinements = 2;           // uniform refinements of the coarse primitive
 };
 
+// The synthetic fetal phantom (imaging/phantom.h), generated in memory: its label map is the volume.
+struct PhantomSource {
+  int seed = 1;
+  double spacing_m = 1e-3;
+};
+
 struct MeshSpec {
   MeshSource source = MeshSource::generated;
   std::filesystem::path path;  // file or volume, absolute
-  MeshingOptions meshing;      // volume only
+  PhantomSource phantom;       // phantom only
+  MeshingOptions meshing;      // volume and phantom
   GeneratedMesh generated;     // generated only
   ElementType element = ElementType::p1;
   SourceLocation where;

@@ -181,13 +181,13 @@ void read_mesh(MapView& scene, MeshSpec& out) {
   const Entry e = scene.entry("mesh");
   out.where = {e.key_mark.line + 1, e.key_mark.column + 1};
   MapView map(scene.reader(), e.value, e.path, e.key_mark,
-              {"file", "volume", "generate", "meshing", "element"});
+              {"file", "volume", "phantom", "generate", "meshing", "element"});
   if (!map.valid()) return;
-  const int sources = int(map.has("file")) + int(map.has("volume")) + int(map.has("generate"));
+  const int sources = int(map.has("file")) + int(map.has("volume")) + int(map.has("phantom")) + int(map.has("generate"));
   if (sources != 1) {
     map.reader().error(map.mark(), map.path(),
-                       sources == 0 ? "give the mesh as one of file, volume or generate"
-                                    : "give only one of file, volume or generate");
+                       sources == 0 ? "give the mesh as one of file, volume, phantom or generate"
+                                    : "give only one of file, volume, phantom or generate");
     return;
   }
   map.choice("element", out.element, kElements);
@@ -198,17 +198,30 @@ void read_mesh(MapView& scene, MeshSpec& out) {
     out.source = MeshSource::volume;
     map.existing_path("volume", out.path, Need::required, {".mha", ".mhd", ".vti", ".nrrd", ".nhdr"},
                       /*allow_directory=*/true);
+  } else if (map.has("phantom")) {
+    out.source = MeshSource::phantom;
+    const Entry p = map.entry("phantom");
+    MapView phantom(map.reader(), p.value, p.path, p.key_mark, {"seed", "spacing_m"});
+    if (phantom.valid()) {
+      phantom.integer("seed", out.phantom.seed, {0, 2147483647});
+      phantom.number("spacing_m", out.phantom.spacing_m, {2.5e-4, 5e-3, false, false});
+    }
+    // The whole sac (wall, fluid, fetus) unless the meshing options say which labels.
+    out.meshing.labels = {1, 2, 3, 4, 5, 6};
   } else {
     out.source = MeshSource::generated;
     read_generated(map, out.generated);
   }
   if (map.has("meshing")) {
-    if (out.source == MeshSource::volume) {
+    if (out.source == MeshSource::volume || out.source == MeshSource::phantom) {
+      if (out.source == MeshSource::phantom) out.meshing.labels.clear();
       read_meshing(map, out.meshing);
+      if (out.source == MeshSource::phantom && out.meshing.labels.empty() && !out.meshing.fetus && !out.meshing.threshold)
+        out.meshing.labels = {1, 2, 3, 4, 5, 6};
     } else {
       const Entry meshing = map.entry("meshing");
       map.reader().error(meshing.key_mark, meshing.path,
-                         "meshing options apply only to a mesh made from a volume (mesh.volume)");
+                         "meshing options apply only to a mesh made from a volume or the phantom (mesh.volume, mesh.phantom)");
     }
   }
 }
@@ -707,6 +720,7 @@ const char* to_string(MeshSource v) {
   switch (v) {
     case MeshSource::file: return "file";
     case MeshSource::volume: return "volume";
+    case MeshSource::phantom: return "phantom";
     case MeshSource::generated: return "generate";
   }
   return "?";

@@ -170,6 +170,8 @@ TissueMeshInfo build_tissue_mesh(const config::MeshSpec& spec, Triangulation<3>&
     case config::MeshSource::volume:
       throw std::runtime_error(spec.path.string() +
                                ": a volume must be meshed first (fetouch mesh VOLUME -o MESH)");
+    case config::MeshSource::phantom:
+      throw std::runtime_error("the synthetic phantom must be meshed first (the app does: app/scene_mesh.h)");
   }
 
   info.simplex = tria.all_reference_cells_are_simplex();

@@ -102,6 +102,7 @@ void check_referenced_data(SceneReport& report) {
       report.volume = imaging::read_volume_info(mesh.path);
       return;
     }
+    if (mesh.source == config::MeshSource::phantom) return;  // generated and meshed when first used
     if (mesh.source == config::MeshSource::file) {
       log::detail() << "reading " << mesh.path.string();
       report.mesh_file = meshes::read_mesh_summary(mesh.path);
@@ -157,6 +158,10 @@ std::string describe_mesh(const SceneReport& r) {
     case config::MeshSource::volume:
       text = "meshed from " + m.path.string() + " at " + number(m.meshing.target_size_m * 1e3) +
              " mm";
+      break;
+    case config::MeshSource::phantom:
+      text = "the synthetic phantom (seed " + std::to_string(m.phantom.seed) + ", " + number(m.phantom.spacing_m * 1e3) +
+             " mm voxels) meshed at " + number(m.meshing.target_size_m * 1e3) + " mm";
       break;
   }
   std::string element = config::to_string(m.element);

@@ -105,6 +105,37 @@ TEST(ReplayCommand, BlockPokeIsReproducibleAndMatchesTheStaticSolve) {
   fs::remove_all(dir);
 }
 
+// The shipped fetal scene: its tissue is the phantom, generated and meshed on first use (cached);
+// a second run reuses the mesh and renders the same forces; the poke reaches contact, the force
+// stays under the device maximum and the gains stay stable at every frame.
+TEST(ReplayCommand, FetusPhantomSceneMeshesOnceAndReplays) {
+  const fs::path dir = fs::temp_directory_path() / ("fetouch_replay_fetus_" + std::to_string(::getpid()));
+  fs::remove_all(dir);
+  const std::string env = "FETOUCH_CACHE_DIR=" + (dir / "cache").string() + " ";
+  const std::string scene = std::string(FETOUCH_SOURCE_DIR) + "/config/scenes/fetus_phantom.yaml";
+  std::vector<app::Recording> runs;
+  for (const char* name : {"a", "b"}) {
+    const auto r = run_command(env + fetouch("replay --json --mesh-every 0 --out " + (dir / name).string() + " " + scene));
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    EXPECT_EQ(r.err.find("meshing the scene's phantom") != std::string::npos, std::string(name) == "a") << r.err;
+    const YAML::Node j = YAML::Load(r.out);
+    EXPECT_EQ(j["newton_failures"].as<long>(), 0);
+    EXPECT_GT(j["min_stability_margin"].as<double>(), 0);
+    EXPECT_EQ(j["frames_with_unstable_gains"].as<long>(), 0);
+    EXPECT_LE(j["max_force_n"].as<double>(), 3.3);
+    runs.push_back(app::read_recording(dir / name / "recording.h5"));
+  }
+  const auto& a = runs[0].devices.at(0).samples;
+  const auto& b = runs[1].devices.at(0).samples;
+  ASSERT_EQ(a.size(), b.size());
+  for (std::size_t k = 0; k < a.size(); ++k)
+    ASSERT_EQ(std::memcmp(a[k].force.data(), b[k].force.data(), 3 * sizeof(double)), 0) << "tick " << k;
+  EXPECT_TRUE(a[1600].in_contact);  // mid-hold
+  EXPECT_GT(a[1600].normal_force, 0.2);
+  EXPECT_FALSE(a[2990].in_contact);  // lifted off
+  fs::remove_all(dir);
+}
+
 TEST(ReplayCommand, BadRequestsAreRefused) {
   const std::string scene = std::string(FETOUCH_SOURCE_DIR) + "/config/scenes/block_press.yaml";
   const auto realtime = run_command(fetouch("replay --clock realtime --out /tmp/x " + scene));
