@@ -72,11 +72,14 @@ SessionSummary run_lockstep(haptics::Environment& environment, std::vector<std::
   std::vector<double> solve_times;
   solve_times.reserve(static_cast<std::size_t>(ticks / settings.loop.ratio + 2));
   SessionSummary summary;
+  if (settings.keep_forces)
+    summary.forces.assign(static_cast<std::size_t>(m), std::vector<Eigen::Vector3d>(static_cast<std::size_t>(ticks)));
   auto last_flush = std::chrono::steady_clock::now();
   const auto drain = [&] {
-    if (!writer || filled == 0) return;
-    for (int d = 0; d < m; ++d) writer->append(d, pending[d].data(), filled);
+    if (writer && filled > 0)
+      for (int d = 0; d < m; ++d) writer->append(d, pending[d].data(), filled);
     filled = 0;
+    if (!writer) return;
     if (std::chrono::duration<double>(std::chrono::steady_clock::now() - last_flush).count() >= settings.flush_period_s) {
       writer->flush();
       last_flush = std::chrono::steady_clock::now();
@@ -90,6 +93,7 @@ SessionSummary run_lockstep(haptics::Environment& environment, std::vector<std::
     const std::vector<haptics::ContactOutput>& out = session.tick(points);
     for (int d = 0; d < m; ++d) {
       forces[d] = out[d].force;
+      if (settings.keep_forces) summary.forces[d][static_cast<std::size_t>(k)] = out[d].force;
       summary.max_force_n = std::max(summary.max_force_n, out[d].force.norm());
       DeviceSample& s = pending[d][filled];
       s.time_s = k * period;

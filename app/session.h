@@ -28,6 +28,7 @@ struct SessionSettings {
   long max_ticks = -1;                      // < 0: until every device has finished
   // Called after each frame's update is taken up (outside the tick): frame number, time.
   std::function<void(long, double)> after_frame;
+  bool keep_forces = false;                 // the summary keeps every force sent (studies)
 };
 
 struct SessionSummary {
@@ -37,6 +38,7 @@ struct SessionSummary {
   double max_force_n = 0;            // the largest force sent to a device
   double min_stability_margin = 1;   // 1 - spectral radius of the chosen gains, over the frames
   long frames_with_unstable_gains = 0;
+  std::vector<std::vector<Eigen::Vector3d>> forces;  // per device, per tick (keep_forces)
 };
 
 // Runs until the devices finish (or max_ticks). Allocation happens only outside the tick.

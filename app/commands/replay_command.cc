@@ -9,6 +9,7 @@
 #include <fstream>
 #include <iostream>
 #include <limits>
+#include <optional>
 #include <memory>
 #include <sstream>
 
@@ -35,6 +36,7 @@ namespace fs = std::filesystem;
 struct ReplayOptions {
   std::string scene, trajectory, clock = "lockstep", out = "fetouch-replay";
   int mesh_every = 10;  // frames between deformed meshes (0: none)
+  bool compare_ideal = false;
   bool json = false;
 };
 
@@ -121,8 +123,93 @@ haptics::Trajectory probe_trajectory(const config::Probe& probe, int index, cons
   return haptics::read_trajectory_csv(file);
 }
 
+SessionSummary run_session(const config::Scene& scene, const ReplayOptions& o, const haptics::HapticLoopSettings& settings,
+                           const fs::path* out, bool keep_forces);
+
+const char* model_name(haptics::LocalModelKind k) {
+  switch (k) {
+    case haptics::LocalModelKind::p: return "p";
+    case haptics::LocalModelKind::pi: return "pi";
+    case haptics::LocalModelKind::smith: return "smith";
+    case haptics::LocalModelKind::pi_smith: return "pi_smith";
+  }
+  return "?";
+}
+const char* hold_name(haptics::HoldKind h) { return h == haptics::HoldKind::foh ? "foh" : "zoh"; }
+
+// The multirate local models against the ideal reference: the same session with the solver at
+// the haptic rate (N = 1). Per local model and hold, per probe: the RMS of the force error
+// relative to the ideal force's RMS, the peak error, and the 2 % settling time of the force after
+// the trajectory's longest hold begins (the step it answers), against the force at the hold's end.
+struct PairError {
+  std::string model, hold;
+  std::vector<double> rms_relative, peak_n, settling_s;
+};
+struct IdealComparison {
+  std::vector<double> ideal_settling_s;
+  std::vector<PairError> pairs;
+  double hold_start_s = 0, hold_end_s = 0;
+};
+
+// The longest stretch over which the first probe's trajectory stays put.
+std::pair<double, double> longest_hold(const haptics::Trajectory& t) {
+  std::pair<double, double> best{0, 0};
+  for (std::size_t i = 1; i < t.times_s.size(); ++i)
+    if ((t.positions_m[i] - t.positions_m[i - 1]).norm() < 1e-12 && t.times_s[i] - t.times_s[i - 1] > best.second - best.first)
+      best = {t.times_s[i - 1], t.times_s[i]};
+  return best;
+}
+
+double settling_time(const std::vector<Eigen::Vector3d>& force, double period, double start, double end) {
+  const long a = std::lround(start / period), b = std::min<long>(std::lround(end / period), static_cast<long>(force.size()) - 1);
+  if (b <= a) return 0;
+  const Eigen::Vector3d final_value = force[static_cast<std::size_t>(b)];
+  const double band = 0.02 * final_value.norm();
+  long last_out = a;
+  for (long k = a; k <= b; ++k)
+    if ((force[static_cast<std::size_t>(k)] - final_value).norm() > band) last_out = k;
+  return (last_out - a) * period;
+}
+
+IdealComparison compare_with_ideal(const config::Scene& scene, const ReplayOptions& o) {
+  IdealComparison c;
+  const haptics::HapticLoopSettings base = loop_settings(scene);
+  const auto hold = longest_hold(probe_trajectory(scene.probes.front(), 0, o));
+  c.hold_start_s = hold.first, c.hold_end_s = hold.second;
+  haptics::HapticLoopSettings ideal_settings = base;
+  ideal_settings.ratio = 1;
+  ideal_settings.hold = haptics::HoldKind::zoh;
+  log::info() << "the ideal reference: the solver at the haptic rate (N = 1)";
+  const SessionSummary ideal = run_session(scene, o, ideal_settings, nullptr, true);
+  const std::size_t probes = ideal.forces.size();
+  for (std::size_t p = 0; p < probes; ++p)
+    c.ideal_settling_s.push_back(settling_time(ideal.forces[p], base.period_s, hold.first, hold.second));
+  for (auto model : {haptics::LocalModelKind::p, haptics::LocalModelKind::pi, haptics::LocalModelKind::smith,
+                     haptics::LocalModelKind::pi_smith})
+    for (auto h : {haptics::HoldKind::zoh, haptics::HoldKind::foh}) {
+      haptics::HapticLoopSettings s = base;
+      s.local_model = model, s.hold = h;
+      const SessionSummary run = run_session(scene, o, s, nullptr, true);
+      PairError e;
+      e.model = model_name(model), e.hold = hold_name(h);
+      for (std::size_t p = 0; p < probes; ++p) {
+        double error2 = 0, ideal2 = 0, peak = 0;
+        const std::size_t n = std::min(run.forces[p].size(), ideal.forces[p].size());
+        for (std::size_t k = 0; k < n; ++k) {
+          const double d = (run.forces[p][k] - ideal.forces[p][k]).norm();
+          error2 += d * d, ideal2 += ideal.forces[p][k].squaredNorm(), peak = std::max(peak, d);
+        }
+        e.rms_relative.push_back(ideal2 > 0 ? std::sqrt(error2 / ideal2) : 0);
+        e.peak_n.push_back(peak);
+        e.settling_s.push_back(settling_time(run.forces[p], base.period_s, hold.first, hold.second));
+      }
+      c.pairs.push_back(e);
+    }
+  return c;
+}
+
 void write_summary(std::ostream& out, const ReplayOptions& o, const config::Scene& scene, const SessionSummary& s,
-                   const fs::path& recording, double seconds) {
+                   const fs::path& recording, double seconds, const std::optional<IdealComparison>& comparison) {
   JsonWriter json(out);
   json.begin_object();
   json.key("scene").value(scene.name);
@@ -141,8 +228,96 @@ void write_summary(std::ostream& out, const ReplayOptions& o, const config::Scen
   json.key("min_stability_margin").value(s.min_stability_margin);
   json.key("frames_with_unstable_gains").value(s.frames_with_unstable_gains);
   json.key("wall_s").value(seconds);
+  if (comparison) {
+    json.key("compare_ideal").begin_object();
+    json.key("hold_s").begin_array().value(comparison->hold_start_s).value(comparison->hold_end_s).end_array();
+    json.key("ideal_settling_s").begin_array();
+    for (double x : comparison->ideal_settling_s) json.value(x);
+    json.end_array();
+    json.key("pairs").begin_array();
+    for (const auto& e : comparison->pairs) {
+      json.begin_object();
+      json.key("local_model").value(e.model);
+      json.key("hold").value(e.hold);
+      json.key("rms_error_relative").begin_array();
+      for (double x : e.rms_relative) json.value(x);
+      json.end_array();
+      json.key("peak_error_n").begin_array();
+      for (double x : e.peak_n) json.value(x);
+      json.end_array();
+      json.key("settling_s").begin_array();
+      for (double x : e.settling_s) json.value(x);
+      json.end_array();
+      json.end_object();
+    }
+    json.end_array();
+    json.end_object();
+  }
   json.end_object();
   out << "\n";
+}
+
+// One session of the scene with these loop settings: the tissue built afresh, the devices from the
+// scene. With `out`, the recording, the meshes and the PVD are written there.
+SessionSummary run_session(const config::Scene& scene, const ReplayOptions& o, const haptics::HapticLoopSettings& settings,
+                           const fs::path* out, bool keep_forces) {
+  log::info() << "building the tissue model of " << scene.name;
+  std::unique_ptr<fem::TissueModel> model = fem::build_tissue_model(scene);
+  std::vector<std::unique_ptr<haptics::Device>> devices;
+  SessionSettings session;
+  session.loop = settings;
+  session.keep_forces = keep_forces;
+  for (int p = 0; p < static_cast<int>(scene.probes.size()); ++p) {
+    const config::Probe& probe = scene.probes[p];
+    const haptics::Trajectory path = probe_trajectory(probe, p, o);
+    const Eigen::Vector3d touch = nearest_boundary_point(model->triangulation, path.positions_m.front());
+    log::detail() << "probe " << probe.name << ": contact patch at (" << touch.transpose() << ") m";
+    model->solver->add_contact_patch(dealii::Point<3>(touch[0], touch[1], touch[2]), probe.radius_m);
+    switch (probe.device.type) {
+      case config::DeviceType::replay:
+        devices.push_back(std::make_unique<haptics::ReplayDevice>(path, settings.period_s));
+        break;
+      case config::DeviceType::operator_model: {
+        const auto& h = probe.device.hand;
+        devices.push_back(std::make_unique<haptics::VirtualOperator>(
+            path, haptics::HandParameters{h.mass_kg, h.stiffness_n_per_m, h.damping_n_s_per_m}, settings.period_s));
+        break;
+      }
+      default:
+        throw std::runtime_error("probe " + probe.name + ": a " + std::string(config::to_string(probe.device.type)) +
+                                 " device needs hardware; replay uses replay or operator devices");
+    }
+    session.probes.push_back(probe.name);
+  }
+  fem::FemEnvironment environment(std::move(model->solver), model->newton);
+  std::vector<std::pair<double, std::string>> meshes;
+  if (out) {
+    fs::create_directories(*out);
+    session.recording = *out / "recording.h5";
+    session.header.program_version = std::string("fetouch ") + kVersion + " (" + kGitRevision + ")";
+    session.header.scene_path = scene.source.string();
+    session.header.scene_text = scene.text;
+    session.header.local_model = config::to_string(scene.haptics.local_model);
+    session.header.hold = config::to_string(scene.haptics.hold);
+    // The deformed tissue every mesh_every frames (and at rest), as VTU files listed in a PVD.
+    const auto write_mesh = [&environment, &meshes, &scene, out](long frame, double time_s) {
+      const std::string name = "mesh/" + scene.name + "_" + std::to_string(frame) + ".vtu";
+      environment.solver().write_vtu((*out / name).string());
+      meshes.emplace_back(time_s, name);
+    };
+    if (o.mesh_every > 0) {
+      fs::create_directories(*out / "mesh");
+      write_mesh(0, 0);
+      session.after_frame = [write_mesh, every = o.mesh_every](long frame, double time_s) {
+        if ((frame + 1) % every == 0) write_mesh(frame + 1, time_s);
+      };
+    }
+  }
+  log::info() << "replaying " << scene.probes.size() << " probe(s) in lockstep, N = " << settings.ratio << ", "
+              << model_name(settings.local_model) << " with " << hold_name(settings.hold);
+  SessionSummary summary = run_lockstep(environment, devices, session);
+  if (!meshes.empty()) write_pvd(*out / (scene.name + ".pvd"), meshes);
+  return summary;
 }
 
 int run_replay(const ReplayOptions& o) {
@@ -165,68 +340,18 @@ int run_replay(const ReplayOptions& o) {
   ensure_mpi();
   const fs::path out(o.out), recording = fs::path(o.out) / "recording.h5";
   SessionSummary summary;
+  std::optional<IdealComparison> comparison;
   try {
     scene.mesh = mesh_scene_volume(scene.mesh);
-    log::info() << "building the tissue model of " << scene.name;
-    std::unique_ptr<fem::TissueModel> model = fem::build_tissue_model(scene);
-    const haptics::HapticLoopSettings settings = loop_settings(scene);
-    std::vector<std::unique_ptr<haptics::Device>> devices;
-    SessionSettings session;
-    session.loop = settings;
-    for (int p = 0; p < static_cast<int>(scene.probes.size()); ++p) {
-      const config::Probe& probe = scene.probes[p];
-      const haptics::Trajectory path = probe_trajectory(probe, p, o);
-      const Eigen::Vector3d touch = nearest_boundary_point(model->triangulation, path.positions_m.front());
-      log::detail() << "probe " << probe.name << ": contact patch at (" << touch.transpose() << ") m";
-      model->solver->add_contact_patch(dealii::Point<3>(touch[0], touch[1], touch[2]), probe.radius_m);
-      switch (probe.device.type) {
-        case config::DeviceType::replay:
-          devices.push_back(std::make_unique<haptics::ReplayDevice>(path, settings.period_s));
-          break;
-        case config::DeviceType::operator_model: {
-          const auto& h = probe.device.hand;
-          devices.push_back(std::make_unique<haptics::VirtualOperator>(
-              path, haptics::HandParameters{h.mass_kg, h.stiffness_n_per_m, h.damping_n_s_per_m}, settings.period_s));
-          break;
-        }
-        default:
-          throw std::runtime_error("probe " + probe.name + ": a " + std::string(config::to_string(probe.device.type)) +
-                                   " device needs hardware; replay uses replay or operator devices");
-      }
-      session.probes.push_back(probe.name);
-    }
-    fs::create_directories(out);
-    session.recording = recording;
-    session.header.program_version = std::string("fetouch ") + kVersion + " (" + kGitRevision + ")";
-    session.header.scene_path = scene.source.string();
-    session.header.scene_text = scene.text;
-    session.header.local_model = config::to_string(scene.haptics.local_model);
-    session.header.hold = config::to_string(scene.haptics.hold);
-    fem::FemEnvironment environment(std::move(model->solver), model->newton);
-    // The deformed tissue every mesh_every frames (and at rest), as VTU files listed in a PVD.
-    std::vector<std::pair<double, std::string>> meshes;
-    const auto write_mesh = [&](long frame, double time_s) {
-      const std::string name = "mesh/" + scene.name + "_" + std::to_string(frame) + ".vtu";
-      environment.solver().write_vtu((out / name).string());
-      meshes.emplace_back(time_s, name);
-    };
-    if (o.mesh_every > 0) {
-      fs::create_directories(out / "mesh");
-      write_mesh(0, 0);
-      session.after_frame = [&](long frame, double time_s) {
-        if ((frame + 1) % o.mesh_every == 0) write_mesh(frame + 1, time_s);
-      };
-    }
-    log::info() << "replaying " << scene.probes.size() << " probe(s) in lockstep, N = " << settings.ratio;
-    summary = run_lockstep(environment, devices, session);
-    if (!meshes.empty()) write_pvd(out / (scene.name + ".pvd"), meshes);
+    summary = run_session(scene, o, loop_settings(scene), &out, false);
+    if (o.compare_ideal) comparison = compare_with_ideal(scene, o);
   } catch (const std::exception& e) {
     std::cerr << "error: " << o.scene << ": " << e.what() << "\n";
     return kExitBadInput;
   }
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   std::ostringstream text;
-  write_summary(text, o, scene, summary, recording, seconds);
+  write_summary(text, o, scene, summary, recording, seconds, comparison);
   std::ofstream(out / "summary.json") << text.str();
   if (o.json) {
     std::cout << text.str();
@@ -239,6 +364,14 @@ int run_replay(const ReplayOptions& o) {
     std::printf("  wrote %s, %s", recording.string().c_str(), (out / "summary.json").string().c_str());
     if (o.mesh_every > 0) std::printf(" and %s (open in ParaView)", (out / (scene.name + ".pvd")).string().c_str());
     std::printf("\n");
+    if (comparison) {
+      std::printf("against the ideal (N = 1; force settles 2 %% in %.3f s after the hold starts at %.2f s):\n",
+                  comparison->ideal_settling_s.empty() ? 0.0 : comparison->ideal_settling_s[0], comparison->hold_start_s);
+      std::printf("  %-9s %-5s %12s %12s %12s   (first probe)\n", "model", "hold", "RMS error", "peak (N)", "settling (s)");
+      for (const auto& e : comparison->pairs)
+        std::printf("  %-9s %-5s %11.2f%% %12.4f %12.3f\n", e.model.c_str(), e.hold.c_str(), 100 * e.rms_relative[0],
+                    e.peak_n[0], e.settling_s[0]);
+    }
   }
   return kExitOk;
 }
@@ -265,6 +398,9 @@ void add_replay_command(CLI::App& parent, int& exit_code) {
   cmd->add_option("--mesh-every", o->mesh_every, "Frames between deformed meshes written (0: none)")
       ->check(CLI::NonNegativeNumber)
       ->capture_default_str();
+  cmd->add_flag("--compare-ideal", o->compare_ideal,
+                "Also run the ideal reference (the solver at the haptic rate, N = 1) and every local model and\n"
+                "hold, and report each one's force error against it (RMS, peak, 2 % settling after the hold starts)");
   cmd->add_flag("--json", o->json, "Print the summary as JSON on stdout");
   cmd->callback([o, &exit_code]() { exit_code = run_replay(*o); });
 }

@@ -109,5 +109,28 @@ TEST(LockstepSession, TwoRunsRecordTheSameForces) {
   }
 }
 
+TEST(LockstepSession, WithoutARecordingKeepsTheSameForces) {
+  // No recording file (studies keep the forces in memory): the 1201 ticks go through the sample
+  // buffers more than once, and the forces kept equal the recorded run's.
+  const fs::path file = fs::temp_directory_path() / ("fetouch_session_kept_" + std::to_string(::getpid()) + ".h5");
+  auto recorded_environment = two_contacts();
+  auto recorded_devices = replays();
+  run_lockstep(recorded_environment, recorded_devices, settings(file));
+  const Recording r = read_recording(file);
+  fs::remove(file);
+  SessionSettings s = settings(file);
+  s.recording.reset();
+  s.keep_forces = true;
+  auto environment = two_contacts();
+  auto devices = replays();
+  const SessionSummary kept = run_lockstep(environment, devices, s);
+  EXPECT_FALSE(fs::exists(file));
+  ASSERT_EQ(kept.forces.size(), 2u);
+  for (int d = 0; d < 2; ++d) {
+    ASSERT_EQ(kept.forces[d].size(), r.devices[d].samples.size());
+    for (std::size_t k = 0; k < kept.forces[d].size(); ++k) ASSERT_EQ(kept.forces[d][k], r.devices[d].samples[k].force) << k;
+  }
+}
+
 }  // namespace
 }  // namespace fetouch::app
