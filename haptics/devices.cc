@@ -85,6 +85,29 @@ void write_trajectory_csv(const Trajectory& trajectory, const std::filesystem::p
   if (!out) throw std::runtime_error(path.string() + ": could not be written");
 }
 
+Trajectory scripted_path(PathShape shape, const PathSettings& s) {
+  if (!(s.normal.norm() > 0)) throw std::invalid_argument("path: the normal must not be zero");
+  if (!(s.approach_m >= 0) || !(s.depth_m >= 0)) throw std::invalid_argument("path: lengths must not be negative");
+  for (double d : {s.approach_s, s.press_s, s.hold_s, s.release_s, s.retreat_s})
+    if (!(d > 0)) throw std::invalid_argument("path: every duration must be positive");
+  const Eigen::Vector3d n = s.normal.normalized();
+  const Eigen::Vector3d moved = shape == PathShape::slide ? s.slide_m : Eigen::Vector3d::Zero();
+  Trajectory t;
+  double time = 0;
+  const auto row = [&](double after, const Eigen::Vector3d& p) {
+    time += after;
+    t.times_s.push_back(time);
+    t.positions_m.push_back(p);
+  };
+  row(0, s.point + s.approach_m * n);
+  row(s.approach_s, s.point);
+  row(s.press_s, s.point - s.depth_m * n);
+  row(s.hold_s, s.point + moved - s.depth_m * n);
+  row(s.release_s, s.point + moved);
+  row(s.retreat_s, s.point + moved + s.approach_m * n);
+  return t;
+}
+
 ReplayDevice::ReplayDevice(const Trajectory& trajectory, double period_s) : points_(trajectory.resampled(period_s)) {
   if (points_.empty()) throw std::invalid_argument("replay: an empty trajectory");
 }

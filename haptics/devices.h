@@ -38,6 +38,24 @@ Trajectory read_trajectory_csv(const std::filesystem::path& path);
 // Writes the same format (with a header), full precision.
 void write_trajectory_csv(const Trajectory& trajectory, const std::filesystem::path& path, const std::string& comment = "");
 
+// Scripted probe paths, relative to where the probe meets the surface and the surface's outward
+// normal there (m, s). Each starts `approach_m` above the point, reaches the surface after
+// approach_s, presses `depth_m` along -normal over press_s, then:
+//   - poke: holds for hold_s;
+//   - slide: moves by `slide_m` (along the surface) over hold_s, still pressed;
+//   - squeeze: the same as a poke, meant with long press and release times (a slow squeeze);
+// then releases to the surface over release_s and retreats to the start height over retreat_s.
+// Positions between the rows are linear (Trajectory::at).
+enum class PathShape { poke, slide, squeeze };
+struct PathSettings {
+  Eigen::Vector3d point = Eigen::Vector3d::Zero(), normal = Eigen::Vector3d::UnitZ();
+  Eigen::Vector3d slide_m = Eigen::Vector3d::Zero();
+  double approach_m = 0.01, depth_m = 0.008;
+  double approach_s = 0.5, press_s = 0.5, hold_s = 1.0, release_s = 0.5, retreat_s = 0.5;
+};
+// Throws std::invalid_argument for a zero normal, a negative length or a non-positive duration.
+Trajectory scripted_path(PathShape shape, const PathSettings& settings);
+
 class Device {
  public:
   virtual ~Device() = default;

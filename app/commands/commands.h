@@ -16,5 +16,6 @@ void add_reconstruct_command(CLI::App& parent, int& exit_code);
 void add_mesh_command(CLI::App& parent, int& exit_code);
 void add_render_command(CLI::App& parent, int& exit_code);
 void add_replay_command(CLI::App& parent, int& exit_code);
+void add_trajectory_command(CLI::App& parent, int& exit_code);
 
 }  // namespace fetouch::app

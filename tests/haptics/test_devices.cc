@@ -134,3 +134,30 @@ TEST(VirtualOperator, RefusesANonPhysicalHand) {
 
 }  // namespace
 }  // namespace fetouch::haptics
+
+namespace fetouch::haptics {
+namespace {
+
+TEST(ScriptedPath, PokeSlideAndSqueezeFollowTheirPhases) {
+  PathSettings s;
+  s.point = Eigen::Vector3d(0.01, 0.02, 0.03);
+  s.normal = Eigen::Vector3d(0, 0, 2);  // normalised inside
+  s.slide_m = Eigen::Vector3d(0.02, 0, 0);
+  s.approach_m = 0.01, s.depth_m = 0.005;
+  s.approach_s = 0.4, s.press_s = 0.6, s.hold_s = 1.0, s.release_s = 0.5, s.retreat_s = 0.5;
+  const Trajectory poke = scripted_path(PathShape::poke, s);
+  ASSERT_EQ(poke.times_s, (std::vector<double>{0, 0.4, 1.0, 2.0, 2.5, 3.0}));
+  EXPECT_TRUE(poke.at(0).isApprox(Eigen::Vector3d(0.01, 0.02, 0.04)));
+  EXPECT_TRUE(poke.at(0.4).isApprox(s.point));
+  EXPECT_TRUE(poke.at(1.5).isApprox(Eigen::Vector3d(0.01, 0.02, 0.025)));  // held 5 mm deep
+  EXPECT_TRUE(poke.at(0.7).isApprox(Eigen::Vector3d(0.01, 0.02, 0.0275)));  // halfway down
+  const Trajectory slide = scripted_path(PathShape::slide, s);
+  EXPECT_TRUE(slide.at(1.5).isApprox(Eigen::Vector3d(0.02, 0.02, 0.025)));  // halfway along, pressed
+  EXPECT_TRUE(slide.at(3.0).isApprox(Eigen::Vector3d(0.03, 0.02, 0.04)));
+  EXPECT_TRUE(scripted_path(PathShape::squeeze, s).at(1.5).isApprox(poke.at(1.5)));
+  s.hold_s = 0;
+  EXPECT_THROW(scripted_path(PathShape::poke, s), std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace fetouch::haptics
