@@ -225,8 +225,8 @@ long RecordingWriter::samples(int device) const {
 
 namespace {
 
-// A whole dataset as doubles (or its integer values converted), with its row count.
-std::vector<double> read_all(hid_t group, const std::string& name, hsize_t columns, hsize_t* rows, const std::string& file) {
+// A whole dataset (rows x columns) as doubles, integer values converted.
+std::vector<double> read_all(hid_t group, const std::string& name, hsize_t columns, const std::string& file) {
   const hid_t dataset = H5Dopen2(group, name.c_str(), H5P_DEFAULT);
   if (dataset < 0) throw std::runtime_error(file + ": no dataset " + name);
   H5Drefresh(dataset);  // the newest extent a writer has flushed
@@ -234,7 +234,6 @@ std::vector<double> read_all(hid_t group, const std::string& name, hsize_t colum
   hsize_t dims[2] = {0, 1};
   H5Sget_simple_extent_dims(space, dims, nullptr);
   H5Sclose(space);
-  *rows = dims[0];
   std::vector<double> values(static_cast<std::size_t>(dims[0] * columns));
   const herr_t status = values.empty() ? 0 : H5Dread(dataset, H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, values.data());
   H5Dclose(dataset);
@@ -295,15 +294,14 @@ Recording read_recording(const std::filesystem::path& path) {
       if (H5Lget_name_by_idx(devices, ".", H5_INDEX_CRT_ORDER, H5_ITER_INC, i, probe, sizeof probe, H5P_DEFAULT) < 0)
         H5Lget_name_by_idx(devices, ".", H5_INDEX_NAME, H5_ITER_INC, i, probe, sizeof probe, H5P_DEFAULT);
       const hid_t g = H5Gopen2(devices, probe, H5P_DEFAULT);
-      hsize_t n = 0, m = 0;
-      const auto time = read_all(g, "time_s", 1, &n, name);
-      const auto position = read_all(g, "position_m", 3, &m, name);
-      const auto velocity = read_all(g, "velocity_m_per_s", 3, &m, name);
-      const auto force = read_all(g, "force_n", 3, &m, name);
-      const auto proxy = read_all(g, "proxy_m", 3, &m, name);
-      const auto penetration = read_all(g, "penetration_m", 1, &m, name);
-      const auto normal = read_all(g, "normal_force_n", 1, &m, name);
-      const auto contact = read_all(g, "in_contact", 1, &m, name);
+      const auto time = read_all(g, "time_s", 1, name);
+      const auto position = read_all(g, "position_m", 3, name);
+      const auto velocity = read_all(g, "velocity_m_per_s", 3, name);
+      const auto force = read_all(g, "force_n", 3, name);
+      const auto proxy = read_all(g, "proxy_m", 3, name);
+      const auto penetration = read_all(g, "penetration_m", 1, name);
+      const auto normal = read_all(g, "normal_force_n", 1, name);
+      const auto contact = read_all(g, "in_contact", 1, name);
       H5Gclose(g);
       // Datasets are extended one after the other: a session killed between two keeps the rows
       // every dataset has.
@@ -326,17 +324,16 @@ Recording read_recording(const std::filesystem::path& path) {
     H5Gclose(devices);
     const hid_t frames = H5Gopen2(file, "frames", H5P_DEFAULT);
     if (frames >= 0) {
-      hsize_t n = 0, m = 0;
-      const auto frame = read_all(frames, "frame", 1, &n, name);
-      const auto time = read_all(frames, "time_s", 1, &m, name);
-      const auto solve = read_all(frames, "solve_s", 1, &m, name);
-      const auto residual = read_all(frames, "residual", 1, &m, name);
-      const auto margin = read_all(frames, "stability_margin", 1, &m, name);
-      const auto iterations = read_all(frames, "newton_iterations", 1, &m, name);
-      const auto converged = read_all(frames, "converged", 1, &m, name);
+      const auto frame = read_all(frames, "frame", 1, name);
+      const auto time = read_all(frames, "time_s", 1, name);
+      const auto solve = read_all(frames, "solve_s", 1, name);
+      const auto residual = read_all(frames, "residual", 1, name);
+      const auto margin = read_all(frames, "stability_margin", 1, name);
+      const auto iterations = read_all(frames, "newton_iterations", 1, name);
+      const auto converged = read_all(frames, "converged", 1, name);
       const hsize_t contacts = std::max<hsize_t>(1, out.devices.size());
-      const auto eigenvalues = read_all(frames, "stiffness_eigenvalues_n_per_m", contacts, &m, name);
-      const auto gains = read_all(frames, "gains", 2, &m, name);
+      const auto eigenvalues = read_all(frames, "stiffness_eigenvalues_n_per_m", contacts, name);
+      const auto gains = read_all(frames, "gains", 2, name);
       H5Gclose(frames);
       const std::size_t rows = std::min({frame.size(), time.size(), solve.size(), residual.size(), margin.size(),
                                          iterations.size(), converged.size(), std::size_t(eigenvalues.size() / contacts), gains.size() / 2});

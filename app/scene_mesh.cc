@@ -6,14 +6,14 @@
 #include <chrono>
 #include <cstdlib>
 #include <functional>
+#include <iostream>
 #include <sstream>
 #include <stdexcept>
 
 #include "app/log.h"
+#include "config/scene_loader.h"
 #include "imaging/phantom.h"
-#include "imaging/segmentation.h"
 #include "imaging/volume_io.h"
-#include "meshes/volume_mesher.h"
 
 namespace fetouch::app {
 
@@ -73,9 +73,7 @@ void mesh_into(const config::MeshSpec& spec, const fs::path& file) {
                            : m.smoothing == config::SmoothingFilter::median ? imaging::TissueSegmentation::Smoothing::median
                                                                             : imaging::TissueSegmentation::Smoothing::gaussian;
   const imaging::Mask mask = imaging::segment_tissue(volume, segmentation);
-  meshes::MaskVolume input;
-  input.dimensions = mask.dimensions, input.spacing_mm = mask.spacing_mm, input.origin_mm = mask.origin_mm;
-  input.direction = mask.direction, input.data = mask.data;
+  const meshes::MaskVolume input = mask_volume(mask);
   meshes::MeshingSettings settings;
   settings.element_size_mm = m.target_size_m * 1e3;
   if (m.refine_center_m) {
@@ -96,6 +94,22 @@ void mesh_into(const config::MeshSpec& spec, const fs::path& file) {
 }
 
 }  // namespace
+
+std::optional<config::Scene> load_scene_or_report(const std::string& file) {
+  try {
+    return config::load_scene(file).scene;
+  } catch (const config::SceneError& error) {
+    for (const auto& d : error.diagnostics()) std::cerr << d.format() << "\n";
+    return std::nullopt;
+  }
+}
+
+meshes::MaskVolume mask_volume(const imaging::Mask& mask) {
+  meshes::MaskVolume out;
+  out.dimensions = mask.dimensions, out.spacing_mm = mask.spacing_mm, out.origin_mm = mask.origin_mm;
+  out.direction = mask.direction, out.data = mask.data;
+  return out;
+}
 
 fs::path mesh_cache_dir() {
   if (const char* d = std::getenv("FETOUCH_CACHE_DIR"); d && *d) return d;

@@ -8,15 +8,26 @@
 #pragma once
 
 #include <filesystem>
+#include <optional>
+#include <string>
 
 #include "config/scene.h"
+#include "imaging/segmentation.h"
+#include "meshes/volume_mesher.h"
 
 namespace fetouch::app {
+
+// Loads a scene for a command that runs it; a scene with errors has each printed to stderr
+// (file:line:column) and gives nothing.
+std::optional<config::Scene> load_scene_or_report(const std::string& file);
 
 // The spec unchanged unless it is a volume or the phantom; then a `file` spec of the cached .vtu (meshed now if
 // not cached). Throws std::runtime_error naming the volume and what failed.
 config::MeshSpec mesh_scene_volume(const config::MeshSpec& spec);
 
 std::filesystem::path mesh_cache_dir();
+
+// A segmentation as the mesher takes it: the same voxels, spacing, origin and direction.
+meshes::MaskVolume mask_volume(const imaging::Mask& mask);
 
 }  // namespace fetouch::app

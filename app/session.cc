@@ -75,15 +75,17 @@ SessionSummary run_lockstep(haptics::Environment& environment, std::vector<std::
   if (settings.keep_forces)
     summary.forces.assign(static_cast<std::size_t>(m), std::vector<Eigen::Vector3d>(static_cast<std::size_t>(ticks)));
   auto last_flush = std::chrono::steady_clock::now();
+  // The buffered ticks to the recording (flushed every flush_period_s of wall time); without a
+  // recording they are simply dropped.
   const auto drain = [&] {
-    if (writer && filled > 0)
+    if (writer) {
       for (int d = 0; d < m; ++d) writer->append(d, pending[d].data(), filled);
-    filled = 0;
-    if (!writer) return;
-    if (std::chrono::duration<double>(std::chrono::steady_clock::now() - last_flush).count() >= settings.flush_period_s) {
-      writer->flush();
-      last_flush = std::chrono::steady_clock::now();
+      if (std::chrono::duration<double>(std::chrono::steady_clock::now() - last_flush).count() >= settings.flush_period_s) {
+        writer->flush();
+        last_flush = std::chrono::steady_clock::now();
+      }
     }
+    filled = 0;
   };
 
   for (long k = 0; k < ticks; ++k) {

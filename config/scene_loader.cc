@@ -206,24 +206,22 @@ void read_mesh(MapView& scene, MeshSpec& out) {
       phantom.integer("seed", out.phantom.seed, {0, 2147483647});
       phantom.number("spacing_m", out.phantom.spacing_m, {2.5e-4, 5e-3, false, false});
     }
-    // The whole sac (wall, fluid, fetus) unless the meshing options say which labels.
-    out.meshing.labels = {1, 2, 3, 4, 5, 6};
   } else {
     out.source = MeshSource::generated;
     read_generated(map, out.generated);
   }
   if (map.has("meshing")) {
     if (out.source == MeshSource::volume || out.source == MeshSource::phantom) {
-      if (out.source == MeshSource::phantom) out.meshing.labels.clear();
       read_meshing(map, out.meshing);
-      if (out.source == MeshSource::phantom && out.meshing.labels.empty() && !out.meshing.fetus && !out.meshing.threshold)
-        out.meshing.labels = {1, 2, 3, 4, 5, 6};
     } else {
       const Entry meshing = map.entry("meshing");
       map.reader().error(meshing.key_mark, meshing.path,
                          "meshing options apply only to a mesh made from a volume or the phantom (mesh.volume, mesh.phantom)");
     }
   }
+  // The phantom's label map: the whole uterus (wall, fluid, fetus) unless the options choose.
+  if (out.source == MeshSource::phantom && out.meshing.labels.empty() && !out.meshing.fetus && !out.meshing.threshold)
+    out.meshing.labels = {1, 2, 3, 4, 5, 6};
 }
 
 // ---- material -----------------------------------------------------------------------------------

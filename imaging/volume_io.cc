@@ -8,7 +8,6 @@
 #include <vtkDICOMImageReader.h>
 #include <vtkDataSetAttributes.h>
 #include <vtkInformation.h>
-#include <vtkMatrix3x3.h>
 #include <vtkStreamingDemandDrivenPipeline.h>
 #include <vtkDataArray.h>
 #include <vtkImageData.h>
@@ -198,27 +197,35 @@ void check_nrrd_size(const std::filesystem::path& path) {
                              std::to_string(static_cast<long long>(available)));
 }
 
-}  // namespace
+// VTK reports reader failures as error events, not exceptions: this collects a reader's, to throw.
+// It registers its own address with the reader, so it stays where it is made.
+class ReaderErrors {
+ public:
+  explicit ReaderErrors(vtkAlgorithm* reader) {
+    callback_->SetCallback(&ReaderErrors::on_error);
+    callback_->SetClientData(this);
+    reader->AddObserver(vtkCommand::ErrorEvent, callback_);
+  }
+  ReaderErrors(const ReaderErrors&) = delete;
+  ReaderErrors& operator=(const ReaderErrors&) = delete;
+  const std::string& messages() const { return messages_; }
 
-namespace {
-
-// VTK reports reader failures as error events, not exceptions; they are collected and thrown.
-struct ErrorCollector {
-  std::string messages;
+ private:
   static void on_error(vtkObject*, unsigned long, void* client, void* call_data) {
-    auto* self = static_cast<ErrorCollector*>(client);
+    auto* self = static_cast<ReaderErrors*>(client);
     if (!call_data) return;
     std::string text = static_cast<const char*>(call_data);
     while (!text.empty() && (text.back() == '\n' || text.back() == ' ')) text.pop_back();
-    self->messages += (self->messages.empty() ? "" : "; ") + text;
+    self->messages_ += (self->messages_.empty() ? "" : "; ") + text;
   }
+  std::string messages_;
+  vtkNew<vtkCallbackCommand> callback_;
 };
 
 struct OpenVolume {
   vtkSmartPointer<vtkAlgorithm> reader;
   std::string format;
-  ErrorCollector errors;
-  vtkNew<vtkCallbackCommand> callback;
+  std::unique_ptr<ReaderErrors> errors;
 };
 
 // The reader for a file (by extension) or a folder (a DICOM series), its header read.
@@ -250,14 +257,12 @@ std::unique_ptr<OpenVolume> open_volume(const std::filesystem::path& path) {
     throw std::runtime_error(name + ": unknown volume format '" + e +
                              "'; expected .mha, .mhd, .vti, .nrrd, .nhdr or a folder with a DICOM series");
   }
-  v->callback->SetCallback(&ErrorCollector::on_error);
-  v->callback->SetClientData(&v->errors);
-  v->reader->AddObserver(vtkCommand::ErrorEvent, v->callback);
+  v->errors = std::make_unique<ReaderErrors>(v->reader);
   {
     const QuietVtk quiet;
     v->reader->UpdateInformation();
   }
-  if (!v->errors.messages.empty()) throw std::runtime_error(name + ": " + v->errors.messages);
+  if (!v->errors->messages().empty()) throw std::runtime_error(name + ": " + v->errors->messages());
   return v;
 }
 
@@ -342,14 +347,10 @@ Volume<float> read_dicom_series(const std::filesystem::path& folder) {
     auto r = vtkSmartPointer<vtkDICOMImageReader>::New();
     if (!r->CanReadFile(file.string().c_str())) continue;  // not DICOM (a DICOMDIR, notes, ...)
     r->SetFileName(file.string().c_str());
-    ErrorCollector errors;
-    vtkNew<vtkCallbackCommand> callback;
-    callback->SetCallback(&ErrorCollector::on_error);
-    callback->SetClientData(&errors);
-    r->AddObserver(vtkCommand::ErrorEvent, callback);
+    const ReaderErrors errors(r);
     vtkImageData* image = run(r);
-    if (!errors.messages.empty() || !image || !image->GetPointData()->GetScalars())
-      throw std::runtime_error(file.string() + ": no image could be read" + (errors.messages.empty() ? "" : ": " + errors.messages));
+    if (!errors.messages().empty() || !image || !image->GetPointData()->GetScalars())
+      throw std::runtime_error(file.string() + ": no image could be read" + (errors.messages().empty() ? "" : ": " + errors.messages()));
     int dims[3];
     image->GetDimensions(dims);
     const float* iop = r->GetImageOrientationPatient();
@@ -461,7 +462,7 @@ Volume<float> read_volume(const std::filesystem::path& path) {
   auto opened = open_volume(path);
   const VolumeInfo info = info_of(path, *opened);
   vtkImageData* image = run(opened->reader);
-  if (!opened->errors.messages.empty()) throw std::runtime_error(name + ": " + opened->errors.messages);
+  if (!opened->errors->messages().empty()) throw std::runtime_error(name + ": " + opened->errors->messages());
   int dims[3] = {0, 0, 0};
   if (image) image->GetDimensions(dims);
   vtkDataArray* scalars = image ? image->GetPointData()->GetScalars() : nullptr;

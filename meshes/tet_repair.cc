@@ -260,12 +260,6 @@ class RepairMesh {
   std::vector<std::vector<int>> star_;
 };
 
-double mesh_min_dihedral(const std::vector<Point3>& nodes, const std::vector<Tet>& tets) {
-  double q = 180;
-  for (const Tet& t : tets) q = std::min(q, min_dihedral_deg(nodes, t));
-  return tets.empty() ? 0 : q;
-}
-
 }  // namespace
 
 double tet_signed_volume(const Point3& a, const Point3& b, const Point3& c, const Point3& d) {
@@ -346,9 +340,43 @@ bool boundary_is_closed_manifold(const std::vector<Tet>& tets) {
   return true;
 }
 
+QualityReport mesh_quality(const std::vector<Point3>& nodes, const std::vector<Tet>& tets) {
+  QualityReport q;
+  q.min_dihedral_deg = 180, q.max_dihedral_deg = 0, q.min_radius_ratio = 1;
+  for (const auto& t : tets) {
+    const Point3 p[4] = {nodes[t[0]], nodes[t[1]], nodes[t[2]], nodes[t[3]]};
+    const double volume = tet_signed_volume(p[0], p[1], p[2], p[3]);
+    q.volume_m3 += volume;
+    double scale = 0;
+    for (int a = 0; a < 4; ++a)
+      for (int b = a + 1; b < 4; ++b) scale = std::max(scale, norm(sub(p[a], p[b])));
+    if (volume <= 0) {
+      ++(std::abs(volume) <= 1e-12 * scale * scale * scale ? q.degenerate : q.inverted);
+      q.min_dihedral_deg = 0, q.min_radius_ratio = 0;
+      continue;
+    }
+    double area = 0;
+    for (const auto& f : kFace) area += norm(cross(sub(p[f[1]], p[f[0]]), sub(p[f[2]], p[f[0]]))) / 2;
+    for (double angle : dihedral_angles_deg(p[0], p[1], p[2], p[3])) {
+      q.min_dihedral_deg = std::min(q.min_dihedral_deg, angle);
+      q.max_dihedral_deg = std::max(q.max_dihedral_deg, angle);
+      ++q.dihedral_histogram[std::min(17, static_cast<int>(angle / 10))];
+    }
+    // Radius ratio 3 r / R: r = 3V / area; R from the products of opposite edges' lengths.
+    const double a = norm(sub(p[0], p[1])) * norm(sub(p[2], p[3])), b = norm(sub(p[0], p[2])) * norm(sub(p[1], p[3])),
+                 c = norm(sub(p[0], p[3])) * norm(sub(p[1], p[2]));
+    const double circumradius = std::sqrt(std::max(0.0, (a + b + c) * (a + b - c) * (a - b + c) * (-a + b + c))) / (24 * volume);
+    const double ratio = 3 * (3 * volume / area) / circumradius;
+    q.min_radius_ratio = std::min(q.min_radius_ratio, ratio);
+    ++q.radius_ratio_histogram[std::clamp(static_cast<int>(ratio * 10), 0, 9)];
+  }
+  if (tets.empty()) q.min_dihedral_deg = 0, q.min_radius_ratio = 0;
+  return q;
+}
+
 SliverRepair repair_slivers(std::vector<Point3>& nodes, std::vector<Tet>& tets, double target_deg) {
   SliverRepair report;
-  report.min_dihedral_before_deg = mesh_min_dihedral(nodes, tets);
+  report.min_dihedral_before_deg = mesh_quality(nodes, tets).min_dihedral_deg;
   for (int pass = 0; pass < 20; ++pass) {
     RepairMesh mesh(nodes, tets);
     std::vector<std::pair<double, int>> bad;
@@ -372,7 +400,7 @@ SliverRepair repair_slivers(std::vector<Point3>& nodes, std::vector<Tet>& tets, 
     mesh.compact();
     if (!changed) break;
   }
-  report.min_dihedral_after_deg = mesh_min_dihedral(nodes, tets);
+  report.min_dihedral_after_deg = mesh_quality(nodes, tets).min_dihedral_deg;
   return report;
 }
 

@@ -1,4 +1,4 @@
-// Tetrahedral mesh geometry and sliver repair, independent of any mesher.
+// Tetrahedral mesh geometry, quality and sliver repair, independent of any mesher.
 //
 // A mesher that must keep a given surface (Gmsh inside a segmented surface) leaves slivers where
 // it may not move the surface's nodes: flat tetrahedra whose four nodes lie nearly in a plane.
@@ -36,6 +36,18 @@ std::vector<Triangle> boundary_faces(const std::vector<Tet>& tets);
 // True when every face belongs to one or two elements and the boundary faces form a closed
 // 2-manifold: each boundary edge in exactly two boundary faces, each boundary node's faces one fan.
 bool boundary_is_closed_manifold(const std::vector<Tet>& tets);
+
+struct QualityReport {
+  double min_dihedral_deg = 0, max_dihedral_deg = 0;
+  std::array<long, 18> dihedral_histogram{};      // 10-degree bins, 0..180
+  double min_radius_ratio = 0;                // 3 r_inscribed / R_circumscribed: 1 regular, 0 flat
+  std::array<long, 10> radius_ratio_histogram{};  // 0.1 bins
+  long inverted = 0, degenerate = 0;
+  double volume_m3 = 0;  // the sum of the signed volumes
+};
+
+// Dihedral angles and radius ratios of every element, inverted and degenerate ones counted.
+QualityReport mesh_quality(const std::vector<Point3>& nodes, const std::vector<Tet>& tets);
 
 struct SliverRepair {
   int peeled = 0, flips23 = 0, flips32 = 0, relocated = 0;

@@ -38,13 +38,6 @@ namespace fetouch::meshes {
 
 namespace {
 
-using Vec = std::array<double, 3>;
-
-Vec sub(const Vec& a, const Vec& b) { return {a[0] - b[0], a[1] - b[1], a[2] - b[2]}; }
-Vec cross(const Vec& a, const Vec& b) { return {a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]}; }
-double dot(const Vec& a, const Vec& b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
-double norm(const Vec& a) { return std::sqrt(dot(a, a)); }
-
 long open_edges(vtkPolyData* surface) {
   auto edges = vtkSmartPointer<vtkFeatureEdges>::New();
   edges->SetInputData(surface);
@@ -108,40 +101,6 @@ void check_settings(double volume_mm3, const MeshingSettings& s) {
 
 }  // namespace
 
-QualityReport mesh_quality(const std::vector<std::array<double, 3>>& nodes, const std::vector<std::array<int, 4>>& tets) {
-  QualityReport q;
-  q.min_dihedral_deg = 180, q.max_dihedral_deg = 0, q.min_radius_ratio = 1;
-  static const int faces[4][3] = {{1, 2, 3}, {0, 3, 2}, {0, 1, 3}, {0, 2, 1}};  // face opposite vertex f
-  for (const auto& t : tets) {
-    const Vec p[4] = {nodes[t[0]], nodes[t[1]], nodes[t[2]], nodes[t[3]]};
-    const double volume = tet_signed_volume(p[0], p[1], p[2], p[3]);
-    q.volume_m3 += volume;
-    double scale = 0;
-    for (int a = 0; a < 4; ++a)
-      for (int b = a + 1; b < 4; ++b) scale = std::max(scale, norm(sub(p[a], p[b])));
-    if (volume <= 0) {
-      ++(std::abs(volume) <= 1e-12 * scale * scale * scale ? q.degenerate : q.inverted);
-      q.min_dihedral_deg = 0, q.min_radius_ratio = 0;
-      continue;
-    }
-    double area = 0;
-    for (const auto& f : faces) area += norm(cross(sub(p[f[1]], p[f[0]]), sub(p[f[2]], p[f[0]]))) / 2;
-    for (double angle : dihedral_angles_deg(p[0], p[1], p[2], p[3])) {
-      q.min_dihedral_deg = std::min(q.min_dihedral_deg, angle);
-      q.max_dihedral_deg = std::max(q.max_dihedral_deg, angle);
-      ++q.dihedral_histogram[std::min(17, static_cast<int>(angle / 10))];
-    }
-    // Radius ratio 3 r / R: r = 3V / area; R from the products of opposite edges' lengths.
-    const double a = norm(sub(p[0], p[1])) * norm(sub(p[2], p[3])), b = norm(sub(p[0], p[2])) * norm(sub(p[1], p[3])),
-                 c = norm(sub(p[0], p[3])) * norm(sub(p[1], p[2]));
-    const double circumradius = std::sqrt(std::max(0.0, (a + b + c) * (a + b - c) * (a - b + c) * (-a + b + c))) / (24 * volume);
-    const double ratio = 3 * (3 * volume / area) / circumradius;
-    q.min_radius_ratio = std::min(q.min_radius_ratio, ratio);
-    ++q.radius_ratio_histogram[std::clamp(static_cast<int>(ratio * 10), 0, 9)];
-  }
-  if (tets.empty()) q.min_dihedral_deg = 0, q.min_radius_ratio = 0;
-  return q;
-}
 
 namespace {
 

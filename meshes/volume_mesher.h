@@ -43,15 +43,6 @@ struct MeshingSettings {
   std::function<void(const std::string&, double)> progress;
 };
 
-struct QualityReport {
-  double min_dihedral_deg = 0, max_dihedral_deg = 0;
-  std::array<long, 18> dihedral_histogram{};  // 10-degree bins, 0..180
-  double min_radius_ratio = 0;                // 3 r_inscribed / R_circumscribed: 1 regular, 0 flat
-  std::array<long, 10> radius_ratio_histogram{};  // 0.1 bins
-  long inverted = 0, degenerate = 0;
-  double volume_m3 = 0;  // the sum of the signed volumes
-};
-
 struct VolumeMesh {
   std::vector<std::array<double, 3>> nodes_m;
   std::vector<std::array<int, 4>> tetrahedra;  // positively oriented
@@ -75,8 +66,6 @@ VolumeMesh mesh_mask(const MaskVolume& mask, const MeshingSettings& settings);
 // is refused, as is an empty one.
 VolumeMesh mesh_triangle_surface(const std::vector<Point3>& nodes_mm, const std::vector<Triangle>& triangles,
                                  const MeshingSettings& settings);
-
-QualityReport mesh_quality(const std::vector<std::array<double, 3>>& nodes, const std::vector<std::array<int, 4>>& tets);
 
 // Writes .msh (4.1) or .vtu by extension; throws std::runtime_error naming the file.
 void write_volume_mesh(const VolumeMesh& mesh, const std::filesystem::path& path, int partitions = 0);

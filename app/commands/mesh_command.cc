@@ -15,6 +15,7 @@
 #include "app/json_writer.h"
 #include "app/log.h"
 #include "app/progress.h"
+#include "app/scene_mesh.h"
 #include "imaging/segmentation.h"
 #include "imaging/volume_io.h"
 #include "meshes/volume_mesher.h"
@@ -59,8 +60,7 @@ int run_mesh(const MeshOptions& o) {
     if (o.smoothing == "none") segmentation.smoothing = imaging::TissueSegmentation::Smoothing::none;
     if (o.smoothing == "median") segmentation.smoothing = imaging::TissueSegmentation::Smoothing::median;
     const imaging::Mask m = imaging::segment_tissue(volume, segmentation);
-    mask.dimensions = m.dimensions, mask.spacing_mm = m.spacing_mm, mask.origin_mm = m.origin_mm;
-    mask.direction = m.direction, mask.data = m.data;
+    mask = mask_volume(m);
   } catch (const std::exception& e) {
     std::cerr << "error: " << e.what() << "\n";
     return kExitBadInput;

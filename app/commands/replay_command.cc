@@ -23,7 +23,6 @@
 #include "app/recording.h"
 #include "app/scene_mesh.h"
 #include "app/session.h"
-#include "config/scene_loader.h"
 #include "fem/fem_environment.h"
 #include "fem/tissue_model.h"
 
@@ -326,13 +325,9 @@ int run_replay(const ReplayOptions& o) {
     std::cerr << "error: --clock " << o.clock << ": only the lockstep clock is built so far\n";
     return kExitBadInput;
   }
-  config::Scene scene;
-  try {
-    scene = config::load_scene(o.scene).scene;
-  } catch (const config::SceneError& error) {
-    for (const auto& d : error.diagnostics()) std::cerr << d.format() << "\n";
-    return kExitBadInput;
-  }
+  std::optional<config::Scene> loaded = load_scene_or_report(o.scene);
+  if (!loaded) return kExitBadInput;
+  config::Scene scene = std::move(*loaded);
   if (scene.probes.empty()) {
     std::cerr << "error: " << o.scene << ": the scene has no probes to replay\n";
     return kExitBadInput;

@@ -23,7 +23,6 @@
 #include "app/mpi_session.h"
 #include "app/pvd.h"
 #include "app/progress.h"
-#include "config/scene_loader.h"
 #include "fem/tissue_model.h"
 
 namespace fetouch::app {
@@ -152,13 +151,9 @@ int run_solve(const SolveOptions& o) {
     std::cerr << "error: --point takes three numbers: X Y Z (m)\n";
     return kExitBadInput;
   }
-  config::Scene scene;
-  try {
-    scene = config::load_scene(o.scene).scene;
-  } catch (const config::SceneError& error) {
-    for (const auto& d : error.diagnostics()) std::cerr << d.format() << "\n";
-    return kExitBadInput;
-  }
+  std::optional<config::Scene> loaded = load_scene_or_report(o.scene);
+  if (!loaded) return kExitBadInput;
+  config::Scene scene = std::move(*loaded);
   ensure_mpi();
   std::unique_ptr<fem::TissueModel> model;
   std::vector<int> patches;

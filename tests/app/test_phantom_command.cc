@@ -17,11 +17,6 @@ namespace {
 
 namespace fs = std::filesystem;
 
-std::string bytes(const fs::path& file) {
-  std::ifstream in(file, std::ios::binary);
-  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
-}
-
 TEST(PhantomCommand, WritesVolumesThatReadBackAsReported) {
   const fs::path dir = fs::temp_directory_path() / ("fetouch_phantom_" + std::to_string(::getpid()));
   const auto r = run_command(fetouch("phantom --json --spacing 2 --seed 5 --out " + (dir / "a").string()));
@@ -41,8 +36,8 @@ TEST(PhantomCommand, WritesVolumesThatReadBackAsReported) {
   EXPECT_GT(ml[3] + ml[4] + ml[5] + ml[6], 10.0);  // a fetus of tens of millilitres
   // The same seed again: the same bytes.
   ASSERT_EQ(run_command(fetouch("phantom --spacing 2 --seed 5 --out " + (dir / "b").string())).exit_code, 0);
-  EXPECT_EQ(bytes(dir / "a" / "phantom.mha"), bytes(dir / "b" / "phantom.mha"));
-  EXPECT_EQ(bytes(dir / "a" / "phantom_labels.mha"), bytes(dir / "b" / "phantom_labels.mha"));
+  EXPECT_EQ(read_file_text(dir / "a" / "phantom.mha"), read_file_text(dir / "b" / "phantom.mha"));
+  EXPECT_EQ(read_file_text(dir / "a" / "phantom_labels.mha"), read_file_text(dir / "b" / "phantom_labels.mha"));
   fs::remove_all(dir);
 }
 
