@@ -1,11 +1,21 @@
 #include "app/session.h"
 
 #include <Eigen/Eigenvalues>
+#include <pthread.h>
+#include <sched.h>
+#include <sys/prctl.h>
+#include <time.h>
 
 #include <algorithm>
+#include <atomic>
 #include <chrono>
 #include <cmath>
+#include <exception>
+#include <mutex>
 #include <stdexcept>
+#include <thread>
+
+#include "haptics/lock_free.h"
 
 namespace fetouch::app {
 
@@ -37,31 +47,115 @@ FrameRecord frame_record(const haptics::FrameSlot& slot, double time_s) {
   return f;
 }
 
+// What both clocks share: the checks, the recording, the number of ticks, and the summary's
+// per-frame and per-tick figures.
+class SessionBase {
+ public:
+  SessionBase(haptics::Environment& environment, std::vector<std::unique_ptr<haptics::Device>>& devices,
+              const SessionSettings& settings)
+      : settings_(settings), m_(static_cast<int>(devices.size())) {
+    if (m_ != environment.contacts())
+      throw std::invalid_argument("session: " + std::to_string(m_) + " devices for " +
+                                  std::to_string(environment.contacts()) + " contacts");
+    if (settings.recording) {
+      RecordingHeader header = settings.header;
+      header.probes = settings.probes;
+      header.haptic_rate_hz = 1 / settings.loop.period_s;
+      header.ratio = settings.loop.ratio;
+      writer_ = std::make_unique<RecordingWriter>(*settings.recording, header);
+    }
+    ticks_ = settings.max_ticks;
+    if (ticks_ < 0) {
+      ticks_ = 0;
+      for (const auto& d : devices) ticks_ = std::max(ticks_, d->ticks());
+    }
+    summary_.ticks = ticks_;
+    if (settings.keep_forces)
+      summary_.forces.assign(static_cast<std::size_t>(m_), std::vector<Eigen::Vector3d>(static_cast<std::size_t>(ticks_)));
+    solve_times_.reserve(static_cast<std::size_t>(ticks_ / settings.loop.ratio + 2));
+    last_flush_ = std::chrono::steady_clock::now();
+  }
+
+  long ticks() const { return ticks_; }
+  int devices() const { return m_; }
+
+  // One device's tick as recorded (tick k; `last` is its point at tick k - 1).
+  void sample(long k, const Eigen::Vector3d& point, const Eigen::Vector3d& last, const haptics::ContactOutput& out,
+              DeviceSample& s) const {
+    const double period = settings_.loop.period_s;
+    s.time_s = k * period;
+    s.position = point;
+    s.velocity = k == 0 ? Eigen::Vector3d::Zero() : Eigen::Vector3d((point - last) / period);
+    s.force = out.force;
+    s.proxy = out.proxy;
+    s.penetration = out.penetration;
+    s.normal_force = out.normal_force;
+    s.in_contact = out.in_contact;
+  }
+
+  // Ticks to the summary and the recording: `count` ticks of device d.
+  void take_ticks(int d, const DeviceSample* samples, std::size_t count) {
+    for (std::size_t i = 0; i < count; ++i) {
+      summary_.max_force_n = std::max(summary_.max_force_n, samples[i].force.norm());
+      if (settings_.keep_forces) {
+        const long k = std::lround(samples[i].time_s / settings_.loop.period_s);
+        if (k >= 0 && k < ticks_) summary_.forces[d][static_cast<std::size_t>(k)] = samples[i].force;
+      }
+    }
+    if (writer_) writer_->append(d, samples, count);
+  }
+
+  void take_frame(const FrameRecord& f, const haptics::GainSelection& selection) {
+    solve_times_.push_back(f.solve_s);
+    summary_.newton_failures += !f.converged;
+    if (settings_.loop.schedule_gains) {
+      summary_.min_stability_margin = std::min(summary_.min_stability_margin, f.stability_margin);
+      summary_.frames_with_unstable_gains += !selection.stable;
+    }
+    ++summary_.frames;
+    if (writer_) writer_->append(f);
+  }
+
+  // Flushes the recording when flush_period_s of wall time has passed since the last flush.
+  void flush_if_due() {
+    if (!writer_) return;
+    const auto now = std::chrono::steady_clock::now();
+    if (std::chrono::duration<double>(now - last_flush_).count() >= settings_.flush_period_s) {
+      writer_->flush();
+      last_flush_ = now;
+    }
+  }
+
+  SessionSummary finish() {
+    if (writer_) writer_->flush();
+    summary_.solve_p50_s = percentile(solve_times_, 0.5);
+    summary_.solve_p99_s = percentile(solve_times_, 0.99);
+    summary_.solve_max_s = solve_times_.empty() ? 0 : *std::max_element(solve_times_.begin(), solve_times_.end());
+    return std::move(summary_);
+  }
+
+  SessionSummary& summary() { return summary_; }
+
+ private:
+  const SessionSettings& settings_;
+  int m_;
+  long ticks_ = 0;
+  std::unique_ptr<RecordingWriter> writer_;
+  std::vector<double> solve_times_;
+  SessionSummary summary_;
+  std::chrono::steady_clock::time_point last_flush_;
+};
+
 }  // namespace
 
 SessionSummary run_lockstep(haptics::Environment& environment, std::vector<std::unique_ptr<haptics::Device>>& devices,
                             const SessionSettings& settings) {
-  const int m = static_cast<int>(devices.size());
-  if (m != environment.contacts())
-    throw std::invalid_argument("session: " + std::to_string(m) + " devices for " + std::to_string(environment.contacts()) +
-                                " contacts");
+  SessionBase base(environment, devices, settings);
   haptics::HapticLoop loop(settings.loop, haptics::initial_update(environment));
   haptics::LockstepSession session(loop, environment);
-
-  std::unique_ptr<RecordingWriter> writer;
-  if (settings.recording) {
-    RecordingHeader header = settings.header;
-    header.probes = settings.probes;
-    header.haptic_rate_hz = 1 / settings.loop.period_s;
-    header.ratio = settings.loop.ratio;
-    writer = std::make_unique<RecordingWriter>(*settings.recording, header);
-  }
+  const int m = base.devices();
+  const long ticks = base.ticks();
   const double period = settings.loop.period_s;
-  long ticks = settings.max_ticks;
-  if (ticks < 0) {
-    ticks = 0;
-    for (const auto& d : devices) ticks = std::max(ticks, d->ticks());
-  }
 
   // Buffers sized once: the tick loop below only fills them.
   const std::size_t batch = 1000;
@@ -69,22 +163,10 @@ SessionSummary run_lockstep(haptics::Environment& environment, std::vector<std::
   std::size_t filled = 0;
   std::vector<Eigen::Vector3d> points(static_cast<std::size_t>(m)), last_points(static_cast<std::size_t>(m)),
       forces(static_cast<std::size_t>(m), Eigen::Vector3d::Zero());
-  std::vector<double> solve_times;
-  solve_times.reserve(static_cast<std::size_t>(ticks / settings.loop.ratio + 2));
-  SessionSummary summary;
-  if (settings.keep_forces)
-    summary.forces.assign(static_cast<std::size_t>(m), std::vector<Eigen::Vector3d>(static_cast<std::size_t>(ticks)));
-  auto last_flush = std::chrono::steady_clock::now();
-  // The buffered ticks to the recording (flushed every flush_period_s of wall time); without a
-  // recording they are simply dropped.
+  // The buffered ticks to the summary and the recording (flushed every flush_period_s of wall time).
   const auto drain = [&] {
-    if (writer) {
-      for (int d = 0; d < m; ++d) writer->append(d, pending[d].data(), filled);
-      if (std::chrono::duration<double>(std::chrono::steady_clock::now() - last_flush).count() >= settings.flush_period_s) {
-        writer->flush();
-        last_flush = std::chrono::steady_clock::now();
-      }
-    }
+    for (int d = 0; d < m; ++d) base.take_ticks(d, pending[d].data(), filled);
+    base.flush_if_due();
     filled = 0;
   };
 
@@ -95,17 +177,7 @@ SessionSummary run_lockstep(haptics::Environment& environment, std::vector<std::
     const std::vector<haptics::ContactOutput>& out = session.tick(points);
     for (int d = 0; d < m; ++d) {
       forces[d] = out[d].force;
-      if (settings.keep_forces) summary.forces[d][static_cast<std::size_t>(k)] = out[d].force;
-      summary.max_force_n = std::max(summary.max_force_n, out[d].force.norm());
-      DeviceSample& s = pending[d][filled];
-      s.time_s = k * period;
-      s.position = points[d];
-      s.velocity = k == 0 ? Eigen::Vector3d::Zero() : Eigen::Vector3d((points[d] - last_points[d]) / period);
-      s.force = out[d].force;
-      s.proxy = out[d].proxy;
-      s.penetration = out[d].penetration;
-      s.normal_force = out[d].normal_force;
-      s.in_contact = out[d].in_contact;
+      base.sample(k, points[d], last_points[d], out[d], pending[d][filled]);
       last_points[d] = points[d];
     }
     ++filled;
@@ -113,24 +185,195 @@ SessionSummary run_lockstep(haptics::Environment& environment, std::vector<std::
     if (k % settings.loop.ratio == 0 && k > 0) {
       const haptics::FrameSlot& held = loop.newest();
       const FrameRecord f = frame_record(held, k * period);
-      solve_times.push_back(f.solve_s);
-      summary.newton_failures += !f.converged;
-      if (settings.loop.schedule_gains) {
-        summary.min_stability_margin = std::min(summary.min_stability_margin, f.stability_margin);
-        summary.frames_with_unstable_gains += !held.selection.stable;
-      }
-      ++summary.frames;
-      if (writer) writer->append(f);
-      if (settings.after_frame) settings.after_frame(f.frame, k * period);
+      base.take_frame(f, held.selection);
+      if (settings.after_frame) settings.after_frame(f);
     }
     if (filled == batch) drain();
   }
   drain();
-  if (writer) writer->flush();
-  summary.ticks = ticks;
-  summary.solve_p50_s = percentile(solve_times, 0.5);
-  summary.solve_p99_s = percentile(solve_times, 0.99);
-  summary.solve_max_s = solve_times.empty() ? 0 : *std::max_element(solve_times.begin(), solve_times.end());
+  return base.finish();
+}
+
+namespace {
+
+// The samples of one frame, from the haptic thread to the solver thread.
+struct FrameRequest {
+  long frame = -1;
+  std::vector<haptics::ContactSample> samples;
+};
+
+double seconds_between(const timespec& from, const timespec& to) {
+  return double(to.tv_sec - from.tv_sec) + 1e-9 * double(to.tv_nsec - from.tv_nsec);
+}
+
+void advance(timespec& t, long nanoseconds) {
+  t.tv_nsec += nanoseconds;
+  while (t.tv_nsec >= 1000000000L) t.tv_nsec -= 1000000000L, ++t.tv_sec;
+  while (t.tv_nsec < 0) t.tv_nsec += 1000000000L, --t.tv_sec;
+}
+
+constexpr long kSpinNs = 100'000;  // the haptic thread spins the last 100 us before each deadline
+
+}  // namespace
+
+SessionSummary run_realtime(haptics::Environment& environment, std::vector<std::unique_ptr<haptics::Device>>& devices,
+                            const SessionSettings& settings) {
+  SessionBase base(environment, devices, settings);
+  haptics::HapticLoop loop(settings.loop, haptics::initial_update(environment));
+  const int m = base.devices();
+  const long ticks = base.ticks();
+  const double period = settings.loop.period_s;
+  const long period_ns = std::lround(period * 1e9);
+
+  haptics::TripleBuffer<FrameRequest> requests(FrameRequest{-1, std::vector<haptics::ContactSample>(m)});
+  // Four seconds of ticks: the I/O thread drains it every few milliseconds.
+  haptics::SpscRing<DeviceSample> ring(static_cast<std::size_t>(m) * 4096);
+  std::vector<double> starts(static_cast<std::size_t>(ticks)), lateness(static_cast<std::size_t>(ticks));
+  std::atomic<bool> haptic_done{false}, solver_done{false}, abort{false};
+  std::atomic<long> skipped{0}, dropped{0}, tick_overruns{0};
+  std::atomic<bool> priority_granted{false};
+  long ran = 0;  // ticks the haptic thread ran (read after it joined)
+  std::mutex frames_mutex;  // between the solver and I/O threads only
+  std::vector<std::pair<FrameRecord, haptics::GainSelection>> frames;
+  std::exception_ptr solver_error, io_error;
+
+  timespec origin{};
+  clock_gettime(CLOCK_MONOTONIC, &origin);
+  advance(origin, 20'000'000);  // the first tick 20 ms from now, once the threads are up
+
+  std::thread haptic([&] {
+    if (settings.realtime_priority) {
+      sched_param p{};
+      p.sched_priority = std::min(80, sched_get_priority_max(SCHED_FIFO));
+      priority_granted = pthread_setschedparam(pthread_self(), SCHED_FIFO, &p) == 0;
+    }
+    std::vector<Eigen::Vector3d> points(static_cast<std::size_t>(m)), last(static_cast<std::size_t>(m)),
+        forces(static_cast<std::size_t>(m), Eigen::Vector3d::Zero());
+    std::vector<DeviceSample> block(static_cast<std::size_t>(m));
+    prctl(PR_SET_TIMERSLACK, 1UL, 0, 0, 0);  // wake-ups on time, not up to 50 us late
+    timespec deadline = origin, wake{}, now{};
+    for (long k = 0; k < ticks && !abort.load(std::memory_order_relaxed); ++k) {
+      // Sleep to just before the deadline, then spin the last stretch: the sleep's own wake-up
+      // latency (tens of microseconds on a virtual machine) is spent spinning, not late.
+      wake = deadline;
+      advance(wake, -kSpinNs);
+      while (clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &wake, nullptr) != 0) {
+      }
+      do clock_gettime(CLOCK_MONOTONIC, &now);
+      while (seconds_between(deadline, now) < 0);
+      starts[k] = seconds_between(origin, now);
+      lateness[k] = seconds_between(deadline, now);
+      for (int d = 0; d < m; ++d) points[d] = devices[d]->next(forces[d]);
+      const std::vector<haptics::ContactOutput>& out = loop.tick(points);
+      for (int d = 0; d < m; ++d) {
+        forces[d] = out[d].force;
+        base.sample(k, points[d], last[d], out[d], block[d]);
+        last[d] = points[d];
+      }
+      if (!ring.push(block.data(), block.size())) dropped.fetch_add(1, std::memory_order_relaxed);
+      if (loop.decimated()) {
+        FrameRequest& r = requests.back();
+        r.frame = loop.frame();
+        std::copy(loop.samples().begin(), loop.samples().end(), r.samples.begin());
+        if (!requests.publish()) skipped.fetch_add(1, std::memory_order_relaxed);
+      }
+      advance(deadline, period_ns);
+      clock_gettime(CLOCK_MONOTONIC, &now);
+      const double behind = seconds_between(deadline, now);
+      if (behind > 0) tick_overruns.fetch_add(1, std::memory_order_relaxed);
+      // More than two periods behind (the thread was descheduled): start the schedule afresh
+      // rather than run a burst of late ticks.
+      if (behind > 2 * period) deadline = now;
+      ran = k + 1;
+    }
+    haptic_done = true;
+  });
+
+  std::thread solver([&] {
+    try {
+      for (;;) {
+        if (!requests.take()) {
+          if (haptic_done.load() || abort.load()) break;
+          std::this_thread::sleep_for(std::chrono::microseconds(200));
+          continue;
+        }
+        const FrameRequest& r = requests.front();
+        haptics::FrameSlot& slot = loop.pending_slot();
+        environment.solve(r.samples, r.frame, slot.update);
+        for (int c = 0; c < m; ++c) slot.normal_force(c) = r.samples[c].normal_force;
+        loop.prepare(slot);
+        timespec now{};
+        clock_gettime(CLOCK_MONOTONIC, &now);
+        const double arrived = seconds_between(origin, now);
+        const FrameRecord f = frame_record(slot, arrived);
+        haptics::GainSelection selection = slot.selection;
+        loop.publish();
+        {
+          std::lock_guard<std::mutex> lock(frames_mutex);
+          frames.emplace_back(f, std::move(selection));
+        }
+        if (settings.after_frame) settings.after_frame(f);
+      }
+    } catch (...) {
+      solver_error = std::current_exception();
+      abort = true;
+    }
+    solver_done = true;
+  });
+
+  std::thread io([&] {
+    try {
+      const std::size_t batch = 1024;
+      std::vector<DeviceSample> popped(batch * static_cast<std::size_t>(m));
+      std::vector<std::vector<DeviceSample>> per_device(static_cast<std::size_t>(m), std::vector<DeviceSample>(batch));
+      std::vector<std::pair<FrameRecord, haptics::GainSelection>> taken;
+      for (;;) {
+        const bool finished = haptic_done.load() && solver_done.load();
+        const std::size_t n = ring.pop(popped.data(), popped.size()) / static_cast<std::size_t>(m);
+        for (int d = 0; d < m; ++d) {
+          for (std::size_t i = 0; i < n; ++i) per_device[d][i] = popped[i * m + d];
+          base.take_ticks(d, per_device[d].data(), n);
+        }
+        {
+          std::lock_guard<std::mutex> lock(frames_mutex);
+          taken.swap(frames);
+        }
+        for (const auto& [f, selection] : taken) base.take_frame(f, selection);
+        taken.clear();
+        base.flush_if_due();
+        if (finished && n == 0) break;
+        if (n < batch) std::this_thread::sleep_for(std::chrono::milliseconds(5));
+      }
+    } catch (...) {
+      io_error = std::current_exception();
+      abort = true;
+    }
+  });
+
+  haptic.join();
+  solver.join();
+  io.join();
+  if (solver_error) std::rethrow_exception(solver_error);
+  if (io_error) std::rethrow_exception(io_error);
+
+  SessionSummary summary = base.finish();
+  TimingSummary& t = summary.timing;
+  starts.resize(static_cast<std::size_t>(ran));
+  lateness.resize(static_cast<std::size_t>(ran));
+  std::vector<double> periods;
+  for (std::size_t k = 1; k < starts.size(); ++k) periods.push_back(starts[k] - starts[k - 1]);
+  t.period_p50_s = percentile(periods, 0.5);
+  t.period_p99_s = percentile(periods, 0.99);
+  t.period_max_s = periods.empty() ? 0 : *std::max_element(periods.begin(), periods.end());
+  t.lateness_p50_s = percentile(lateness, 0.5);
+  t.lateness_p99_s = percentile(lateness, 0.99);
+  t.lateness_max_s = lateness.empty() ? 0 : *std::max_element(lateness.begin(), lateness.end());
+  t.tick_overruns = tick_overruns;
+  t.frame_overruns = loop.late_answers();
+  t.first_late_tick = loop.first_late_tick();
+  t.skipped_frames = skipped;
+  t.dropped_samples = dropped;
+  t.realtime_priority = priority_granted;
   return summary;
 }
 

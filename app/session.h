@@ -1,8 +1,16 @@
-// A haptic session in simulated time (lockstep, ARCHITECTURE.md section 5): devices move, the
-// 1 kHz loop renders, the environment answers each frame one frame later, and everything is
-// recorded (app/recording.h). Bit-for-bit reproducible: the same scene, devices and environment give
-// the same bytes. The runtime adds no timing of its own: with an analytic environment its forces are
-// exactly those of haptics::LockstepSession driven by the same device points.
+// A haptic session (ARCHITECTURE.md section 5): devices move, the 1 kHz loop renders, the
+// environment answers each frame, and everything is recorded (app/recording.h). Two clocks:
+//   - lockstep (run_lockstep): simulated time, one thread; the environment answers each frame at
+//     once and its answer is applied exactly one frame later. Bit-for-bit reproducible. The runtime
+//     adds no timing of its own: with an analytic environment its forces are exactly those of
+//     haptics::LockstepSession driven by the same device points.
+//   - real time (run_realtime): a haptic thread ticking on an absolute-deadline clock at the
+//     loop's period, a solver thread answering the newest frame's samples (handed over through a
+//     lock-free triple buffer; the answer goes back through the loop's own lock-free slots), and an
+//     I/O thread draining the ticks from a lock-free ring into the recording and flushing it. A
+//     solve that outlasts its frame is an overrun: its answer is applied at the first frame start
+//     after it arrives, and the hold simply lasts longer. When every solve finishes within its
+//     frame the forces are those of the lockstep clock, bit for bit.
 #pragma once
 
 #include <filesystem>
@@ -26,9 +34,24 @@ struct SessionSettings {
   RecordingHeader header;                   // probes, rate and ratio are filled in here
   double flush_period_s = 0.5;              // wall-clock time between flushes of the recording
   long max_ticks = -1;                      // < 0: until every device has finished
-  // Called after each frame's update is taken up (outside the tick): frame number, time.
-  std::function<void(long, double)> after_frame;
+  // Called after each frame's answer (outside the tick): its row of the recording.
+  std::function<void(const FrameRecord&)> after_frame;
   bool keep_forces = false;                 // the summary keeps every force sent (studies)
+  // Real time: ask for SCHED_FIFO for the haptic thread (granted to root or with CAP_SYS_NICE;
+  // without it the thread runs at normal priority, and the summary says so).
+  bool realtime_priority = true;
+};
+
+// Real-time figures (zero in lockstep).
+struct TimingSummary {
+  double period_p50_s = 0, period_p99_s = 0, period_max_s = 0;       // between tick starts
+  double lateness_p50_s = 0, lateness_p99_s = 0, lateness_max_s = 0; // tick start after its deadline
+  long tick_overruns = 0;     // ticks that ended after the next tick's deadline
+  long frame_overruns = 0;    // frame starts at which the previous frame's answer was not there yet
+  long first_late_tick = -1;  // the tick of the first (-1: none): up to it, forces equal lockstep's
+  long skipped_frames = 0;    // frames whose samples a newer frame replaced before the solver took them
+  long dropped_samples = 0;   // ticks the recording ring had no room for (lost from the recording)
+  bool realtime_priority = false;
 };
 
 struct SessionSummary {
@@ -39,10 +62,17 @@ struct SessionSummary {
   double min_stability_margin = 1;   // 1 - spectral radius of the chosen gains, over the frames
   long frames_with_unstable_gains = 0;
   std::vector<std::vector<Eigen::Vector3d>> forces;  // per device, per tick (keep_forces)
+  TimingSummary timing;
 };
 
 // Runs until the devices finish (or max_ticks). Allocation happens only outside the tick.
 SessionSummary run_lockstep(haptics::Environment& environment, std::vector<std::unique_ptr<haptics::Device>>& devices,
+                            const SessionSettings& settings);
+
+// The same session on the wall clock, in three threads (see above); returns when the devices have
+// finished and the last answer and sample are recorded. after_frame runs in the solver thread. An
+// exception in the solver or the recording stops the session and is rethrown here.
+SessionSummary run_realtime(haptics::Environment& environment, std::vector<std::unique_ptr<haptics::Device>>& devices,
                             const SessionSettings& settings);
 
 }  // namespace fetouch::app

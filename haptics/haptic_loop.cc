@@ -2,6 +2,7 @@
 
 #include <Eigen/Cholesky>
 
+#include <algorithm>
 #include <stdexcept>
 
 namespace fetouch::haptics {
@@ -78,7 +79,14 @@ void HapticLoop::promote() noexcept {
 const std::vector<ContactOutput>& HapticLoop::tick(const std::vector<Eigen::Vector3d>& devices) noexcept {
   const int n = settings_.ratio;
   const int i = static_cast<int>(tick_count_ % n);
-  if (i == 0 && tick_count_ > 0 && (middle_.load(std::memory_order_acquire) & kFresh)) promote();
+  if (i == 0 && tick_count_ > 0) {
+    if (middle_.load(std::memory_order_acquire) & kFresh) {
+      promote();
+    } else {
+      if (late_answers_ == 0) first_late_tick_ = tick_count_;
+      ++late_answers_;
+    }
+  }
 
   if (blend_left_ > 0) {
     --blend_left_;
@@ -87,9 +95,16 @@ const std::vector<ContactOutput>& HapticLoop::tick(const std::vector<Eigen::Vect
                             blend_from_.integral + t * (blend_to_.integral - blend_from_.integral)});
   }
 
+  // Ticks since the newest answer was taken up: i itself while answers arrive on time (always in
+  // lockstep). A late answer (real time, a solve that outlasted its frame) leaves the FOH at the
+  // newest surface rather than starting over from the previous one, and pauses the integrator,
+  // whose frame of integration the stability analysis covers is then complete.
+  const long age = tick_count_ - newest_arrival_;
+  const int held_tick = static_cast<int>(std::min<long>(age, n));
+  local_model_.set_integrating(age < n);
   const FrameSlot& newest = slots_[newest_];
   const FrameSlot& previous = slots_[previous_];
-  const double t = hold_weight(settings_.hold, i, n);
+  const double t = hold_weight(settings_.hold, held_tick, n);
   for (int c = 0; c < contacts_; ++c) {
     if (settings_.hold == HoldKind::zoh)
       held_[c] = newest.update.frames[c];
@@ -97,11 +112,11 @@ const std::vector<ContactOutput>& HapticLoop::tick(const std::vector<Eigen::Vect
       interpolate(previous.update.frames[c], newest.update.frames[c], t, held_[c]);
     penetration_(c) = locate(held_[c], devices[c]).penetration;
   }
-  apply_hold(settings_.hold, i, n, newest.normal_force, previous.normal_force, reference_);
+  apply_hold(settings_.hold, held_tick, n, newest.normal_force, previous.normal_force, reference_);
   const Eigen::VectorXd& force = local_model_.step(penetration_, zeros_, reference_);
   const Eigen::VectorXd& predicted = local_model_.predicted_penetration();
 
-  const double age_s = static_cast<double>(tick_count_ - newest_arrival_) * settings_.period_s;
+  const double age_s = static_cast<double>(age) * settings_.period_s;
   decimated_ = i == 0;
   for (int c = 0; c < contacts_; ++c) {
     ContactOutput& out = outputs_[c];

@@ -3,7 +3,8 @@
 // Per tick k = jN + i (ARCHITECTURE.md section 3, the timing of multirate_loop.h):
 //   1. at i == 0, if an update was published during frame j - 1, it becomes the newest held one
 //      (the previous newest moves back) and its gains start blending in;
-//   2. hold: ZOH uses the newest update's contact frames; FOH interpolates the two newest;
+//   2. hold: ZOH uses the newest update's contact frames; FOH interpolates the two newest (an
+//      answer that comes late, in real time, is held at the newest and pauses the integrator);
 //   3. geometry: each device point's penetration e_c behind the held surface along its normal
 //      (contact_frame.h), and the reference force of the Smith predictor, held the same way;
 //   4. the local model on the m penetrations in normal coordinates, with the compliance projected
@@ -95,6 +96,10 @@ class HapticLoop {
   const LocalModelGains& gains() const { return local_model_.gains(); }
   const FrameSlot& newest() const { return slots_[newest_]; }
   const ForceSafety& safety(int contact) const { return safety_[contact]; }
+  // Frame starts at which no new answer was there (real time: the solve outlasted its frame), and
+  // the tick of the first (-1: none). Never in lockstep.
+  long late_answers() const { return late_answers_; }
+  long first_late_tick() const { return first_late_tick_; }
 
  private:
   void promote() noexcept;
@@ -109,6 +114,7 @@ class HapticLoop {
   std::atomic<int> middle_{3};             // exchanged
   LocalModelGains published_gains_;        // the producer's warm start
   long tick_count_ = 0, newest_arrival_ = 0;
+  long late_answers_ = 0, first_late_tick_ = -1;
   bool decimated_ = false;
 
   // Gain blend: from -> to over blend_ticks.

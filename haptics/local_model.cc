@@ -47,7 +47,7 @@ const Eigen::VectorXd& LocalModel::step(const Eigen::VectorXd& device,
     force_ = kh * error_;
     if (has_integrator()) force_ += integrator_;
   }
-  if (has_integrator()) {
+  if (has_integrator() && integrating_) {
     integrator_ += gains_.integral * error_;
     integrator_ = integrator_.cwiseMax(-integrator_limit_).cwiseMin(integrator_limit_);
   }

@@ -15,7 +15,8 @@
 //   without Smith:  s+ = s + I (x_h - x_held),           F = Kh (x_h - x_held) + s
 //   with Smith:     G = (I + Kh W)^-1,  F = G (Kh (x_h - x_held + W F_ref) + s),
 //                   s+ = s + I (x_h - x_held - W (F - F_ref))
-// Anti-windup: s is clamped to |s| <= s_max per contact.
+// Anti-windup: s is clamped to |s| <= s_max per contact, and set_integrating(false) pauses it (the
+// loop does so while an environment answer is late: the frame's integration is then complete).
 // Unilateral contact (set_unilateral, the 3D loop's setting; the analysis keeps it off): a contact
 // whose force comes out F <= 0 is not touching: F = 0 and s = 0 (reset on contact loss). Since F
 // passes through 0 continuously as the device leaves, neither onset nor release steps the force.
@@ -53,6 +54,7 @@ class LocalModel {
   void set_compliance(const Eigen::MatrixXd& compliance);  // W, for the Smith variants
   void set_integrator_limit(double limit) { integrator_limit_ = limit; }
   void set_unilateral(bool unilateral) { unilateral_ = unilateral; }
+  void set_integrating(bool integrating) { integrating_ = integrating; }
   const LocalModelGains& gains() const { return gains_; }
 
   // One tick: returns F(k) and advances s.
@@ -73,6 +75,7 @@ class LocalModel {
   LocalModelGains gains_;
   double integrator_limit_ = 1e300;
   bool unilateral_ = false;
+  bool integrating_ = true;
   Eigen::MatrixXd compliance_;       // W
   Eigen::MatrixXd loop_matrix_;      // I + Kh W
   Eigen::PartialPivLU<Eigen::MatrixXd> loop_lu_;

@@ -221,7 +221,22 @@ void write_summary(std::ostream& out, const ReplayOptions& o, const config::Scen
   json.key("p99").value(s.solve_p99_s);
   json.key("max").value(s.solve_max_s);
   json.end_object();
-  json.key("overruns").value(0L);  // lockstep: the solver always finishes within its frame
+  // Lockstep: the solver always finishes within its frame, and the clock is simulated.
+  json.key("overruns").value(s.timing.frame_overruns);
+  if (o.clock == "realtime") {
+    const TimingSummary& t = s.timing;
+    json.key("tick_period_s").begin_object();
+    json.key("p50").value(t.period_p50_s).key("p99").value(t.period_p99_s).key("max").value(t.period_max_s);
+    json.end_object();
+    json.key("tick_lateness_s").begin_object();
+    json.key("p50").value(t.lateness_p50_s).key("p99").value(t.lateness_p99_s).key("max").value(t.lateness_max_s);
+    json.end_object();
+    json.key("first_late_tick").value(t.first_late_tick);
+    json.key("tick_overruns").value(t.tick_overruns);
+    json.key("skipped_frames").value(t.skipped_frames);
+    json.key("dropped_samples").value(t.dropped_samples);
+    json.key("realtime_priority").value(t.realtime_priority);
+  }
   json.key("newton_failures").value(s.newton_failures);
   json.key("max_force_n").value(s.max_force_n);
   json.key("min_stability_margin").value(s.min_stability_margin);
@@ -307,24 +322,23 @@ SessionSummary run_session(const config::Scene& scene, const ReplayOptions& o, c
     if (o.mesh_every > 0) {
       fs::create_directories(*out / "mesh");
       write_mesh(0, 0);
-      session.after_frame = [write_mesh, every = o.mesh_every](long frame, double time_s) {
-        if ((frame + 1) % every == 0) write_mesh(frame + 1, time_s);
-      };
     }
+    session.after_frame = [write_mesh, every = o.mesh_every](const FrameRecord& f) {
+      log::debug() << "frame " << f.frame << " answered at " << f.time_s << " s: " << 1e3 * f.solve_s << " ms, "
+                   << f.newton_iterations << " Newton iterations" << (f.converged ? "" : ", not converged");
+      if (every > 0 && (f.frame + 1) % every == 0) write_mesh(f.frame + 1, f.time_s);
+    };
   }
-  log::info() << "replaying " << scene.probes.size() << " probe(s) in lockstep, N = " << settings.ratio << ", "
-              << model_name(settings.local_model) << " with " << hold_name(settings.hold);
-  SessionSummary summary = run_lockstep(environment, devices, session);
+  const bool realtime = out && o.clock == "realtime";  // the comparison runs are lockstep
+  log::info() << "replaying " << scene.probes.size() << " probe(s) " << (realtime ? "in real time" : "in lockstep")
+              << ", N = " << settings.ratio << ", " << model_name(settings.local_model) << " with " << hold_name(settings.hold);
+  SessionSummary summary = realtime ? run_realtime(environment, devices, session) : run_lockstep(environment, devices, session);
   if (!meshes.empty()) write_pvd(*out / (scene.name + ".pvd"), meshes);
   return summary;
 }
 
 int run_replay(const ReplayOptions& o) {
   const auto start = std::chrono::steady_clock::now();
-  if (o.clock != "lockstep") {
-    std::cerr << "error: --clock " << o.clock << ": only the lockstep clock is built so far\n";
-    return kExitBadInput;
-  }
   std::optional<config::Scene> loaded = load_scene_or_report(o.scene);
   if (!loaded) return kExitBadInput;
   config::Scene scene = std::move(*loaded);
@@ -356,6 +370,13 @@ int run_replay(const ReplayOptions& o) {
                 summary.frames, seconds, 1e3 * summary.solve_p50_s, 1e3 * summary.solve_p99_s, 1e3 * summary.solve_max_s);
     std::printf("  max force %.3f N, smallest stability margin %.3f, %ld Newton failures\n", summary.max_force_n,
                 summary.min_stability_margin, summary.newton_failures);
+    if (o.clock == "realtime") {
+      const TimingSummary& t = summary.timing;
+      std::printf("  real time%s: tick period p50 %.3f ms, p99 %.3f ms, max %.3f ms; %ld late ticks; "
+                  "%ld frame overruns, %ld frames skipped\n",
+                  t.realtime_priority ? " (SCHED_FIFO)" : " (normal priority)", 1e3 * t.period_p50_s, 1e3 * t.period_p99_s,
+                  1e3 * t.period_max_s, t.tick_overruns, t.frame_overruns, t.skipped_frames);
+    }
     std::printf("  wrote %s, %s", recording.string().c_str(), (out / "summary.json").string().c_str());
     if (o.mesh_every > 0) std::printf(" and %s (open in ParaView)", (out / (scene.name + ".pvd")).string().c_str());
     std::printf("\n");
@@ -387,7 +408,9 @@ void add_replay_command(CLI::App& parent, int& exit_code) {
   cmd->add_option("scene", o->scene, "Scene file (.yaml)")->required()->check(CLI::ExistingFile);
   cmd->add_option("--trajectory", o->trajectory, "The first probe's trajectory instead of the scene's (CSV t,x,y,z or a recording .h5)")
       ->check(CLI::ExistingFile);
-  cmd->add_option("--clock", o->clock, "lockstep (simulated time)")->check(CLI::IsMember({"lockstep", "realtime"}))
+  cmd->add_option("--clock", o->clock,
+                  "lockstep (simulated time, reproducible) or realtime (a 1 kHz haptic thread on the wall clock, a\n"
+                  "solver thread and an I/O thread; the summary reports the tick period and the overruns)")->check(CLI::IsMember({"lockstep", "realtime"}))
       ->capture_default_str();
   cmd->add_option("--out", o->out, "Output folder")->capture_default_str();
   cmd->add_option("--mesh-every", o->mesh_every, "Frames between deformed meshes written (0: none)")

@@ -6,6 +6,7 @@
 
 #include <cmath>
 #include <cstring>
+#include <iostream>
 #include <filesystem>
 
 #include "app/session.h"
@@ -130,6 +131,50 @@ TEST(LockstepSession, WithoutARecordingKeepsTheSameForces) {
     ASSERT_EQ(kept.forces[d].size(), r.devices[d].samples.size());
     for (std::size_t k = 0; k < kept.forces[d].size(); ++k) ASSERT_EQ(kept.forces[d][k], r.devices[d].samples[k].force) << k;
   }
+}
+
+// The real-time clock: the same session in three threads on the wall clock. Its answers can only
+// differ from lockstep's in when they are taken up: every answer that is there at its frame's start
+// is taken up exactly where lockstep takes it up, so the forces are equal bit for bit up to the
+// first late answer (the summary names its tick; with this analytic environment, whose solve takes
+// microseconds, there is normally none and the whole series must be equal). The recording holds
+// every tick and every answer.
+TEST(RealtimeSession, ForcesEqualLockstepUpToTheFirstLateAnswer) {
+  const fs::path file = fs::temp_directory_path() / ("fetouch_session_rt_" + std::to_string(::getpid()) + ".h5");
+  auto environment = two_contacts();
+  auto devices = replays();
+  const SessionSettings s = settings(file);
+  const SessionSummary summary = run_realtime(environment, devices, s);
+  const Recording r = read_recording(file);
+  fs::remove(file);
+
+  auto reference_environment = two_contacts();
+  haptics::HapticLoop loop(s.loop, haptics::initial_update(reference_environment));
+  haptics::LockstepSession reference(loop, reference_environment);
+  const auto a = paths()[0].resampled(1e-3), b = paths()[1].resampled(1e-3);
+  ASSERT_EQ(summary.ticks, static_cast<long>(a.size()));
+  ASSERT_EQ(summary.timing.dropped_samples, 0);
+  ASSERT_EQ(r.devices[0].samples.size(), a.size());
+  ASSERT_EQ(r.devices[1].samples.size(), a.size());
+  const long compared = summary.timing.first_late_tick < 0 ? static_cast<long>(a.size()) : summary.timing.first_late_tick;
+  if (summary.timing.first_late_tick >= 0)
+    std::cout << "[ note ] " << summary.timing.frame_overruns << " late answer(s), the first at tick "
+              << summary.timing.first_late_tick << ": compared up to it\n";
+  long differing = 0;
+  for (long k = 0; k < compared; ++k) {
+    const auto& out = reference.tick({a[k], k < static_cast<long>(b.size()) ? b[k] : b.back()});
+    for (int d = 0; d < 2; ++d) differing += r.devices[d].samples[k].force != out[d].force;
+    EXPECT_DOUBLE_EQ(r.devices[0].samples[k].time_s, k * 1e-3);
+  }
+  EXPECT_EQ(differing, 0);
+  EXPECT_GT(compared, 50);  // at least the first frames: their answers cannot be late by much
+  // Every frame's samples were answered (none skipped: each solve takes microseconds), the last
+  // frame's too, which lockstep never takes up.
+  EXPECT_EQ(summary.frames, static_cast<long>((a.size() - 1) / 50) + 1 - summary.timing.skipped_frames);
+  EXPECT_EQ(static_cast<long>(r.frames.size()), summary.frames);
+  EXPECT_GT(summary.timing.period_p50_s, 0);
+  EXPECT_GE(summary.timing.period_max_s, summary.timing.period_p99_s);
+  EXPECT_GE(summary.timing.lateness_max_s, 0);
 }
 
 }  // namespace

@@ -266,6 +266,42 @@ TEST(HapticLoop, GainChangesAreBlendedOverTicks) {
   EXPECT_NEAR(largest_step, std::abs(after - before) / 25, 1e-9 * after);
 }
 
+// Real time: an answer that misses its frame. The loop counts it, holds the newest surface (FOH
+// does not start over from the previous one) and pauses the integrator, so a device held still
+// feels a constant force until the answer comes, instead of one that winds up by I e every tick.
+TEST(HapticLoop, ALateAnswerHoldsTheNewestSurfaceAndPausesTheIntegrator) {
+  HapticLoopSettings settings;
+  settings.local_model = LocalModelKind::pi;
+  settings.hold = HoldKind::foh;
+  settings.schedule_gains = false;
+  settings.gains = {300, 4};
+  ContactFrame rest;
+  auto environment = LinearSurfaceEnvironment::isotropic({rest}, 400, 0);
+  HapticLoop loop(settings, initial_update(environment));
+  LockstepSession session(loop, environment);
+  const int n = settings.ratio;
+  const std::vector<Eigen::Vector3d> device{Eigen::Vector3d(0, 0, -0.002)};
+  for (int k = 0; k < 5 * n; ++k) session.tick(device);  // frames 0-4 answered on time
+  loop.tick(device);                                      // frame 5 starts; its answer is withheld
+  for (int k = 1; k < n; ++k) loop.tick(device);
+  EXPECT_EQ(loop.late_answers(), 0);
+  std::vector<double> late_forces;
+  for (int k = 0; k < n; ++k) {  // frame 6: no answer at its start
+    const auto& out = loop.tick(device);
+    late_forces.push_back(out[0].normal_force);
+    EXPECT_DOUBLE_EQ(out[0].penetration, locate(loop.newest().update.frames[0], device[0]).penetration) << k;
+  }
+  EXPECT_EQ(loop.late_answers(), 1);
+  EXPECT_EQ(loop.first_late_tick(), 6L * n);
+  EXPECT_GT(late_forces.front(), 0);
+  for (double f : late_forces) EXPECT_EQ(f, late_forces.front());
+  session.answer();  // frame 5's answer, one frame late: taken up at frame 7's start
+  const double at_start = loop.tick(device)[0].normal_force;
+  const double next = loop.tick(device)[0].normal_force;
+  EXPECT_NE(next, at_start);  // integrating again
+  EXPECT_EQ(loop.late_answers(), 1);
+}
+
 TEST(HapticLoop, ForcesSentAreAlwaysFiniteAndClamped) {
   HapticLoopSettings settings;
   settings.local_model = LocalModelKind::pi;

@@ -11,6 +11,7 @@
 
 #include "haptics/devices.h"
 #include "haptics/haptic_loop.h"
+#include "haptics/lock_free.h"
 #include "haptics/linear_surface_environment.h"
 
 // The replacements pair malloc with free throughout; GCC cannot see that through the inlined
@@ -99,6 +100,35 @@ TEST(TickAllocations, NoneInTheDevicesWithoutHardware) {
   armed = false;
   EXPECT_EQ(allocations.load(), 0);
   EXPECT_TRUE(sum.allFinite());
+}
+
+// What the real-time session's haptic thread does besides the tick: copy the frame's samples into
+// the triple buffer and publish them, and push the tick's records into the ring.
+TEST(TickAllocations, NoneInTheHandOversToOtherThreads) {
+  struct Request {
+    long frame = -1;
+    std::vector<ContactSample> samples = std::vector<ContactSample>(4);
+  };
+  TripleBuffer<Request> requests{Request{}};
+  SpscRing<ContactSample> ring(4 * 64);
+  std::vector<ContactSample> samples(4), popped(4 * 64);
+  allocations = 0;
+  armed = true;
+  long refused = 0;
+  for (long k = 0; k < 1000; ++k) {
+    samples[k % 4].normal_force = double(k);
+    Request& r = requests.back();
+    r.frame = k;
+    std::copy(samples.begin(), samples.end(), r.samples.begin());
+    requests.publish();
+    refused += !ring.push(samples.data(), samples.size());
+  }
+  armed = false;
+  EXPECT_EQ(allocations.load(), 0);
+  EXPECT_GT(refused, 0);  // the ring filled up (nobody drained it) and refused without waiting
+  ASSERT_TRUE(requests.take());
+  EXPECT_EQ(requests.front().frame, 999);
+  EXPECT_EQ(ring.pop(popped.data(), popped.size()), 4u * 64);
 }
 
 }  // namespace
