@@ -169,6 +169,9 @@ struct Haptics {
   double max_force_n = 3.3;
   double max_force_rate_n_per_s = 1000;
   double watchdog_timeout_s = 0.25;
+  // The local model's coupling between contacts (the condensed compliance's cross terms): off,
+  // each contact renders with its own compliance only, and feels the others one frame late.
+  bool coupling = true;
 
   // Ticks per solver frame, N; valid once the scene has been validated.
   int ratio(const Solver& solver) const;

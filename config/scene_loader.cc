@@ -480,8 +480,9 @@ void read_haptics(MapView& scene, Haptics& out) {
   Reader& reader = scene.reader();
   MapView map(reader, e.value, e.path, e.key_mark,
               {"rate_hz", "local_model", "hold", "gains", "robustness_margin", "max_force_n",
-               "max_force_rate_n_per_s", "watchdog_timeout_s"});
+               "max_force_rate_n_per_s", "watchdog_timeout_s", "coupling"});
   if (!map.valid()) return;
+  map.boolean("coupling", out.coupling);
   map.number("rate_hz", out.rate_hz, Range::positive());
   map.choice("local_model", out.local_model, kLocalModels);
   map.choice("hold", out.hold, kHolds);

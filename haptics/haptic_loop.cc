@@ -43,6 +43,7 @@ void HapticLoop::prepare(FrameSlot& slot) const {
   Eigen::MatrixXd normals = Eigen::MatrixXd::Zero(3 * m, m);
   for (int c = 0; c < m; ++c) normals.block<3, 1>(3 * c, c) = slot.update.frames[c].normal;
   slot.normal_compliance = normals.transpose() * slot.update.compliance * normals;
+  if (!settings_.coupling) slot.normal_compliance = Eigen::MatrixXd(slot.normal_compliance.diagonal().asDiagonal());
   if (!settings_.schedule_gains) {
     slot.gains = settings_.gains;
     return;
@@ -52,7 +53,10 @@ void HapticLoop::prepare(FrameSlot& slot) const {
   problem.hold = settings_.hold;
   problem.ratio = settings_.ratio;
   problem.stiffness = Eigen::LDLT<Eigen::MatrixXd>(slot.normal_compliance).solve(Eigen::MatrixXd::Identity(m, m));
-  if (slot.update.damping.size()) problem.damping = normals.transpose() * slot.update.damping * normals;
+  if (slot.update.damping.size()) {
+    problem.damping = normals.transpose() * slot.update.damping * normals;
+    if (!settings_.coupling) problem.damping = Eigen::MatrixXd(problem.damping.diagonal().asDiagonal());
+  }
   const LocalModelGains start = published_gains_;  // the producer's own: newest_ belongs to the tick
   slot.selection = select_gains(problem, settings_.selection, &start);
   // A selection that finds nothing robustly stable keeps the least unstable gains it saw; the

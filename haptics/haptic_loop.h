@@ -43,6 +43,10 @@ struct HapticLoopSettings {
   bool schedule_gains = true;     // re-select the gains for every update's stiffness
   GainSelectionOptions selection;
   int blend_ticks = 20;           // a gain change is spread over this many ticks
+  // The coupling between contacts in the local model: off, W_n is cut to its diagonal (the Smith
+  // predictor and the gain selection see each contact alone). The environment still answers with
+  // the coupled tissue, so the contacts then feel each other only through its frames.
+  bool coupling = true;
   double integrator_limit_n = 1e300;
   ForceSafetyLimits safety;
 };

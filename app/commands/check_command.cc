@@ -257,7 +257,8 @@ void print_text(const SceneReport& r, std::ostream& out) {
                                               (h.integral_n_per_m > 0
                                                    ? ", I = " + number(h.integral_n_per_m) + " N/m"
                                                    : "")) +
-                     ", max force " + number(h.max_force_n) + " N");
+                     ", max force " + number(h.max_force_n) + " N" +
+                     (h.coupling ? "" : ", coupling between probes off"));
   for (const auto& p : s.probes)
     row("probe", p.name + ": " + describe_device(p.device) + ", radius " +
                      number(p.radius_m * 1e3) + " mm");

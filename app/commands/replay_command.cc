@@ -95,6 +95,7 @@ haptics::HapticLoopSettings loop_settings(const config::Scene& scene) {
   s.ratio = h.ratio(scene.solver);
   s.period_s = 1 / h.rate_hz;
   s.schedule_gains = h.automatic_gains;
+  s.coupling = h.coupling;
   s.gains = {h.proportional_n_per_m, h.integral_n_per_m};
   s.selection.margin = h.robustness_margin;
   s.safety.max_force_n = h.max_force_n;
@@ -123,7 +124,7 @@ haptics::Trajectory probe_trajectory(const config::Probe& probe, int index, cons
 }
 
 SessionSummary run_session(const config::Scene& scene, const ReplayOptions& o, const haptics::HapticLoopSettings& settings,
-                           const fs::path* out, bool keep_forces);
+                           const fs::path* out, bool keep_forces, std::vector<Eigen::Vector3d>* patches = nullptr);
 
 const char* model_name(haptics::LocalModelKind k) {
   switch (k) {
@@ -208,12 +209,21 @@ IdealComparison compare_with_ideal(const config::Scene& scene, const ReplayOptio
 }
 
 void write_summary(std::ostream& out, const ReplayOptions& o, const config::Scene& scene, const SessionSummary& s,
-                   const fs::path& recording, double seconds, const std::optional<IdealComparison>& comparison) {
+                   const std::vector<Eigen::Vector3d>& patches, const fs::path& recording, double seconds,
+                   const std::optional<IdealComparison>& comparison) {
   JsonWriter json(out);
   json.begin_object();
   json.key("scene").value(scene.name);
   json.key("clock").value(o.clock);
   json.key("recording").value(recording.string());
+  json.key("probes").begin_array();
+  for (std::size_t p = 0; p < patches.size(); ++p) {
+    json.begin_object();
+    json.key("name").value(scene.probes[p].name);
+    json.key("patch_m").begin_array().value(patches[p].x()).value(patches[p].y()).value(patches[p].z()).end_array();
+    json.end_object();
+  }
+  json.end_array();
   json.key("ticks").value(s.ticks);
   json.key("frames").value(s.frames);
   json.key("solve_s").begin_object();
@@ -274,7 +284,7 @@ void write_summary(std::ostream& out, const ReplayOptions& o, const config::Scen
 // One session of the scene with these loop settings: the tissue built afresh, the devices from the
 // scene. With `out`, the recording, the meshes and the PVD are written there.
 SessionSummary run_session(const config::Scene& scene, const ReplayOptions& o, const haptics::HapticLoopSettings& settings,
-                           const fs::path* out, bool keep_forces) {
+                           const fs::path* out, bool keep_forces, std::vector<Eigen::Vector3d>* patches) {
   log::info() << "building the tissue model of " << scene.name;
   std::unique_ptr<fem::TissueModel> model = fem::build_tissue_model(scene);
   std::vector<std::unique_ptr<haptics::Device>> devices;
@@ -286,6 +296,7 @@ SessionSummary run_session(const config::Scene& scene, const ReplayOptions& o, c
     const haptics::Trajectory path = probe_trajectory(probe, p, o);
     const Eigen::Vector3d touch = nearest_boundary_point(model->triangulation, path.positions_m.front());
     log::detail() << "probe " << probe.name << ": contact patch at (" << touch.transpose() << ") m";
+    if (patches) patches->push_back(touch);
     model->solver->add_contact_patch(dealii::Point<3>(touch[0], touch[1], touch[2]), probe.radius_m);
     switch (probe.device.type) {
       case config::DeviceType::replay:
@@ -349,10 +360,11 @@ int run_replay(const ReplayOptions& o) {
   ensure_mpi();
   const fs::path out(o.out), recording = fs::path(o.out) / "recording.h5";
   SessionSummary summary;
+  std::vector<Eigen::Vector3d> patches;  // each probe's contact patch centre
   std::optional<IdealComparison> comparison;
   try {
     scene.mesh = mesh_scene_volume(scene.mesh);
-    summary = run_session(scene, o, loop_settings(scene), &out, false);
+    summary = run_session(scene, o, loop_settings(scene), &out, false, &patches);
     if (o.compare_ideal) comparison = compare_with_ideal(scene, o);
   } catch (const std::exception& e) {
     std::cerr << "error: " << o.scene << ": " << e.what() << "\n";
@@ -360,7 +372,7 @@ int run_replay(const ReplayOptions& o) {
   }
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   std::ostringstream text;
-  write_summary(text, o, scene, summary, recording, seconds, comparison);
+  write_summary(text, o, scene, summary, patches, recording, seconds, comparison);
   std::ofstream(out / "summary.json") << text.str();
   if (o.json) {
     std::cout << text.str();
