@@ -7,6 +7,11 @@
 // W = H K^-1 H' (3m x 3m) at the new state. A failed frame is rolled back by the solver and
 // reported (status.converged = false, why); the update then repeats the last good frames and W, so
 // the haptic side keeps rendering the last good tissue.
+//
+// The patches follow the probes: before each frame's solve, a patch whose probe has moved along the
+// surface by more than a quarter of its radius (to the boundary point whose deformed position is
+// nearest the device point) is moved there, so a probe sliding over the tissue loads it where it
+// is and its contact frame describes the surface under it.
 #pragma once
 
 #include <memory>
@@ -26,6 +31,8 @@ class FemEnvironment final : public haptics::Environment {
   void solve(const std::vector<haptics::ContactSample>& samples, long frame, haptics::EnvironmentUpdate& out) override;
 
   QuasiStaticSolver& solver() { return *solver_; }
+  void set_follow_probes(bool follow) { follow_ = follow; }
+  long patch_moves() const { return patch_moves_; }
 
  private:
   void describe(haptics::EnvironmentUpdate& out);
@@ -33,6 +40,8 @@ class FemEnvironment final : public haptics::Environment {
   std::unique_ptr<QuasiStaticSolver> solver_;
   NewtonSettings newton_;
   haptics::EnvironmentUpdate last_good_;
+  bool follow_ = true;
+  long patch_moves_ = 0;
 };
 
 }  // namespace fetouch::fem

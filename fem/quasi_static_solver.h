@@ -148,12 +148,20 @@ class QuasiStaticSolver {
   // is the traction w_a F_a, i.e. the load vector H_a' F_a. Returns the patch's index.
   int add_contact_patch(const dealii::Point<3>& center, double radius);
   void set_patch_force(int patch, const dealii::Tensor<1, 3>& force);  // scaled by the load factor
+  // Moves a patch's centre (reference coordinates) and rebuilds its kernel; its force stays. Throws
+  // std::invalid_argument (and leaves the patch as it was) with no boundary within its radius.
+  void move_contact_patch(int patch, const dealii::Point<3>& center);
+  // The reference point X of the boundary whose deformed position X + u(X) is nearest x (or, with
+  // deformed = false, whose reference position is): over the boundary faces (quadrilaterals as two
+  // triangles) with u linear between the vertices' values.
+  dealii::Point<3> boundary_point_nearest(const dealii::Point<3>& x, bool deformed = true) const;
   dealii::Tensor<1, 3> patch_displacement(int patch) const;
   // The patch centre and its displacement, and the deformed outward normal there: the kernel-
   // weighted average of the deformed face normals (Nanson: n da = J F^-T N dA), normalised.
   dealii::Point<3> patch_center(int patch) const;
   dealii::Tensor<1, 3> patch_normal(int patch) const;
   int patches() const;
+  double patch_radius(int patch) const;
   // The condensed compliance at the current state: W = H K^-1 H' (3m x 3m, m/N; row/column 3a + c
   // is patch a, component c), K the consistent tangent with the supports (after a converged solve,
   // the one Newton ended with: no new assembly). The 3m columns K^-1 h are solved to

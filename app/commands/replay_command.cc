@@ -2,7 +2,6 @@
 // trajectory, or the virtual operator pulled along it), rendered by the 1 kHz loop against the FEM
 // tissue in lockstep (app/session.h), recorded to HDF5 with a summary.
 #include <CLI/CLI.hpp>
-#include <deal.II/grid/tria.h>
 
 #include <chrono>
 #include <filesystem>
@@ -38,52 +37,6 @@ struct ReplayOptions {
   bool compare_ideal = false;
   bool json = false;
 };
-
-// The point of the tissue's boundary nearest to p (over its boundary faces, each split into
-// triangles): where a probe starting at p first touches, for a probe coming straight at it.
-Eigen::Vector3d nearest_boundary_point(const dealii::Triangulation<3>& tria, const Eigen::Vector3d& p) {
-  const auto closest_on_triangle = [&](const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Vector3d& c) {
-    // Ericson, Real-Time Collision Detection, 5.1.5: by Voronoi regions of the triangle.
-    const Eigen::Vector3d ab = b - a, ac = c - a, ap = p - a;
-    const double d1 = ab.dot(ap), d2 = ac.dot(ap);
-    if (d1 <= 0 && d2 <= 0) return a;
-    const Eigen::Vector3d bp = p - b;
-    const double d3 = ab.dot(bp), d4 = ac.dot(bp);
-    if (d3 >= 0 && d4 <= d3) return b;
-    const double vc = d1 * d4 - d3 * d2;
-    if (vc <= 0 && d1 >= 0 && d3 <= 0) return Eigen::Vector3d(a + d1 / (d1 - d3) * ab);
-    const Eigen::Vector3d cp = p - c;
-    const double d5 = ab.dot(cp), d6 = ac.dot(cp);
-    if (d6 >= 0 && d5 <= d6) return c;
-    const double vb = d5 * d2 - d1 * d6;
-    if (vb <= 0 && d2 >= 0 && d6 <= 0) return Eigen::Vector3d(a + d2 / (d2 - d6) * ac);
-    const double va = d3 * d6 - d5 * d4;
-    if (va <= 0 && d4 - d3 >= 0 && d5 - d6 >= 0)
-      return Eigen::Vector3d(b + (d4 - d3) / ((d4 - d3) + (d5 - d6)) * (c - b));
-    const double denominator = 1 / (va + vb + vc);
-    return Eigen::Vector3d(a + ab * vb * denominator + ac * vc * denominator);
-  };
-  double best = std::numeric_limits<double>::infinity();
-  Eigen::Vector3d answer = p;
-  for (const auto& cell : tria.active_cell_iterators())
-    for (const unsigned int f : cell->face_indices()) {
-      if (!cell->face(f)->at_boundary()) continue;
-      const auto face = cell->face(f);
-      std::vector<Eigen::Vector3d> v;
-      for (const unsigned int k : face->vertex_indices()) {
-        const auto& x = face->vertex(k);
-        v.emplace_back(x[0], x[1], x[2]);
-      }
-      // A quadrilateral's vertices are in lexicographic order (0 1 / 2 3): triangles 0 1 3, 0 3 2.
-      std::vector<std::array<int, 3>> triangles{{0, 1, 2}};
-      if (v.size() == 4) triangles = {{0, 1, 3}, {0, 3, 2}};
-      for (const auto& t : triangles) {
-        const Eigen::Vector3d q = closest_on_triangle(v[t[0]], v[t[1]], v[t[2]]);
-        if ((q - p).squaredNorm() < best) best = (q - p).squaredNorm(), answer = q;
-      }
-    }
-  return answer;
-}
 
 haptics::HapticLoopSettings loop_settings(const config::Scene& scene) {
   const config::Haptics& h = scene.haptics;
@@ -294,10 +247,11 @@ SessionSummary run_session(const config::Scene& scene, const ReplayOptions& o, c
   for (int p = 0; p < static_cast<int>(scene.probes.size()); ++p) {
     const config::Probe& probe = scene.probes[p];
     const haptics::Trajectory path = probe_trajectory(probe, p, o);
-    const Eigen::Vector3d touch = nearest_boundary_point(model->triangulation, path.positions_m.front());
-    log::detail() << "probe " << probe.name << ": contact patch at (" << touch.transpose() << ") m";
-    if (patches) patches->push_back(touch);
-    model->solver->add_contact_patch(dealii::Point<3>(touch[0], touch[1], touch[2]), probe.radius_m);
+    const Eigen::Vector3d& start = path.positions_m.front();
+    const dealii::Point<3> touch = model->solver->boundary_point_nearest(dealii::Point<3>(start[0], start[1], start[2]));
+    log::detail() << "probe " << probe.name << ": contact patch at (" << touch << ") m";
+    if (patches) patches->emplace_back(touch[0], touch[1], touch[2]);
+    model->solver->add_contact_patch(touch, probe.radius_m);
     switch (probe.device.type) {
       case config::DeviceType::replay:
         devices.push_back(std::make_unique<haptics::ReplayDevice>(path, settings.period_s));
@@ -412,11 +366,12 @@ void add_replay_command(CLI::App& parent, int& exit_code) {
   cmd->footer(
       "Moves each probe with its device (replay: the trajectory as recorded; operator: a hand model\n"
       "pulled along it), renders the force at the haptic rate through the scene's local model and\n"
-      "hold, and solves the tissue once per frame in lockstep (simulated time: the same inputs give\n"
-      "the same forces, bit for bit). Writes DIR/recording.h5 (HDF5: per-tick device series,\n"
+      "hold, and solves the tissue once per frame: in lockstep (simulated time: the same inputs give\n"
+      "the same forces, bit for bit) or in real time (--clock realtime). Writes DIR/recording.h5 (HDF5: per-tick device series,\n"
       "per-frame solver figures), DIR/summary.json and the deformed tissue every --mesh-every frames\n"
       "(DIR/mesh/*.vtu listed in DIR/SCENE.pvd: open it in ParaView, Warp By Vector). Each probe's\n"
-      "contact patch sits on the tissue point nearest its trajectory's start.");
+      "contact patch starts on the tissue point nearest its trajectory's start and follows the probe\n"
+      "along the surface.");
   cmd->add_option("scene", o->scene, "Scene file (.yaml)")->required()->check(CLI::ExistingFile);
   cmd->add_option("--trajectory", o->trajectory, "The first probe's trajectory instead of the scene's (CSV t,x,y,z or a recording .h5)")
       ->check(CLI::ExistingFile);

@@ -8,6 +8,7 @@
 #include <deal.II/grid/grid_generator.h>
 #include <deal.II/grid/tria.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 
@@ -79,6 +80,88 @@ TEST(FemEnvironment, HapticLoopSettlesOnTheFiniteElementEquilibrium) {
   const Tensor<1, 3> u = check->patch_displacement(0);
   const Eigen::Vector3d surface(0.05 + u[0], 0.04 + u[1], 0.05 + u[2]);
   EXPECT_LT(std::abs((surface - device[0]).dot(frame.normal)), 1e-6 * depth);
+}
+
+// A patch moved to a point is the patch added there: the same kernel, so the same displacement
+// under the same force. And the nearest boundary point: on the reference block, the foot of the
+// perpendicular on the face below (or beside) a point outside.
+TEST(QuasiStaticSolver, MovedPatchIsThePatchAddedThereAndNearestPointsAreFeet) {
+  const NeoHookean material(lame_lambda(5000, 0.45), lame_mu(5000, 0.45));
+  dealii::Triangulation<3> tria_a, tria_b;
+  auto a = pressed_block(tria_a, material);
+  auto b = pressed_block(tria_b, material);
+  const Point<3> there(0.062, 0.035, 0.05);
+  a->move_contact_patch(0, there);
+  b->add_contact_patch(there, 0.01);  // b's patch 1; its patch 0 stays unloaded at the centre
+  Tensor<1, 3> f;
+  f[2] = -0.2;
+  a->set_patch_force(0, f);
+  b->set_patch_force(1, f);
+  ASSERT_TRUE(a->solve(NewtonSettings{}).converged);
+  ASSERT_TRUE(b->solve(NewtonSettings{}).converged);
+  EXPECT_EQ(a->patch_center(0).distance(there), 0);
+  for (int d = 0; d < 3; ++d) EXPECT_NEAR(a->patch_displacement(0)[d], b->patch_displacement(1)[d], 1e-12) << d;
+  EXPECT_LT(a->patch_displacement(0)[2], -1e-4);
+
+  EXPECT_LT(a->boundary_point_nearest(Point<3>(0.03, 0.02, 0.07), false).distance(Point<3>(0.03, 0.02, 0.05)), 1e-12);
+  EXPECT_LT(a->boundary_point_nearest(Point<3>(0.13, 0.02, 0.03), false).distance(Point<3>(0.1, 0.02, 0.03)), 1e-12);
+  // On the pressed block, the point just above the deformed patch maps back to the patch's centre
+  // (to within the linear faces' reach of the dimple).
+  const Tensor<1, 3> u = a->patch_displacement(0);
+  const Point<3> above = there + u + Point<3>(0, 0, 1e-4);
+  EXPECT_LT(a->boundary_point_nearest(above).distance(there), 0.003);
+}
+
+// A probe sliding over the surface while pressing: the patch follows it (FemEnvironment moves it
+// by the probe's offset in the tangent plane), and where the slide ends the force is the force of
+// pressing there directly (frictionless, hyperelastic: the path does not matter) to a few percent.
+TEST(FemEnvironment, PatchFollowsASlidingProbe) {
+  const NeoHookean material(lame_lambda(5000, 0.45), lame_mu(5000, 0.45));
+  const double depth = 0.002;
+  const auto settle = [&](std::vector<Eigen::Vector3d> (*path)(int), int ticks, FemEnvironment& environment) {
+    haptics::HapticLoopSettings settings;
+    haptics::HapticLoop loop(settings, haptics::initial_update(environment));
+    haptics::LockstepSession session(loop, environment);
+    double force = 0;
+    for (int k = 0; k < ticks; ++k) force = session.tick(path(k))[0].normal_force;
+    return force;
+  };
+  dealii::Triangulation<3> tria_slide, tria_there;
+  FemEnvironment sliding(pressed_block(tria_slide, material), NewtonSettings{});
+  // Press 2 mm at the centre over 0.5 s, slide 20 mm along x over 1 s, hold 1.5 s.
+  static double z0;
+  z0 = 0.05 - depth;
+  const double slid = settle(
+      [](int k) {
+        const double t = 1e-3 * k;
+        const double x = 0.05 + 0.02 * std::clamp((t - 0.5) / 1.0, 0.0, 1.0);
+        const double z = 0.05 - (0.05 - z0) * std::min(t / 0.5, 1.0);
+        return std::vector<Eigen::Vector3d>{Eigen::Vector3d(x, 0.04, z)};
+      },
+      3000, sliding);
+  const Point<3> centre = sliding.solver().patch_center(0);
+  std::printf("after the slide: %ld patch moves, centre (%.4f, %.4f, %.4f), force %.4f N\n", sliding.patch_moves(),
+              centre[0], centre[1], centre[2], slid);
+  EXPECT_GE(sliding.patch_moves(), 4);  // 20 mm in steps of at least a quarter of the 10 mm radius
+  EXPECT_LT(std::abs(centre[0] - 0.07), 0.25 * 0.01 + 1e-9);
+  EXPECT_NEAR(centre[1], 0.04, 1e-3);
+
+  // Pressing directly at the slide's end, with the patch where the slide left it.
+  dealii::Triangulation<3> tria_direct;
+  auto direct_solver = pressed_block(tria_direct, material);
+  direct_solver->move_contact_patch(0, centre);
+  FemEnvironment direct(std::move(direct_solver), NewtonSettings{});
+  direct.set_follow_probes(false);
+  const double there = settle(
+      [](int k) {
+        const double t = 1e-3 * k;
+        const double z = 0.05 - (0.05 - z0) * std::min(t / 0.5, 1.0);
+        return std::vector<Eigen::Vector3d>{Eigen::Vector3d(0.07, 0.04, z)};
+      },
+      3000, direct);
+  std::printf("pressing there directly: %.4f N\n", there);
+  EXPECT_GT(there, 0.02);
+  EXPECT_NEAR(slid, there, 0.05 * there);
 }
 
 }  // namespace
