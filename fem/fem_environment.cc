@@ -41,19 +41,23 @@ void FemEnvironment::initial(haptics::EnvironmentUpdate& out) {
 void FemEnvironment::solve(const std::vector<haptics::ContactSample>& samples, long frame,
                            haptics::EnvironmentUpdate& out) {
   const auto start = std::chrono::steady_clock::now();
+  if (anchors_.size() != samples.size())
+    for (const auto& sample : samples) anchors_.push_back(sample.position);
   for (int c = 0; c < contacts() && follow_; ++c) {
-    // The probe's offset from the patch's deformed point, in the patch's tangent plane; the patch
-    // moves by it, on the reference surface (measuring against the deformed surface itself would
-    // be ambiguous at the bottom of the dimple a deep press makes).
+    // The probe's own motion since its patch was placed, in the patch's tangent plane; the patch
+    // moves by it on the reference surface. Measured from the device alone: an offset from the
+    // patch's deformed point would feed the deformation back (tried: on a slope, the patch walked
+    // 16 mm down it in three frames and Newton failed).
     const Eigen::Vector3d& x = samples[c].position;
     if (!x.allFinite()) continue;
-    const dealii::Point<3> center = solver_->patch_center(c);
     const dealii::Tensor<1, 3> n = solver_->patch_normal(c);
-    dealii::Tensor<1, 3> offset = dealii::Point<3>(x[0], x[1], x[2]) - (center + solver_->patch_displacement(c));
-    offset -= (offset * n) * n;
-    if (offset.norm() <= 0.25 * solver_->patch_radius(c)) continue;
+    dealii::Tensor<1, 3> motion;
+    for (int d = 0; d < 3; ++d) motion[d] = x[d] - anchors_[c][d];
+    motion -= (motion * n) * n;
+    if (motion.norm() <= 0.25 * solver_->patch_radius(c)) continue;
     try {
-      solver_->move_contact_patch(c, solver_->boundary_point_nearest(center + offset, /*deformed=*/false));
+      solver_->move_contact_patch(c, solver_->boundary_point_nearest(solver_->patch_center(c) + motion, /*deformed=*/false));
+      anchors_[c] = x;
       ++patch_moves_;
     } catch (const std::invalid_argument&) {
       // No boundary within the radius there (cannot happen for a boundary point): stay.

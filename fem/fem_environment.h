@@ -9,12 +9,13 @@
 // the haptic side keeps rendering the last good tissue.
 //
 // The patches follow the probes: before each frame's solve, a patch whose probe has moved along the
-// surface by more than a quarter of its radius (to the boundary point whose deformed position is
-// nearest the device point) is moved there, so a probe sliding over the tissue loads it where it
-// is and its contact frame describes the surface under it.
+// surface (in the patch's tangent plane) by more than a quarter of its radius since the patch was
+// placed is moved by as much over the reference surface, so a probe sliding over the tissue loads
+// it where it is and its contact frame describes the surface under it.
 #pragma once
 
 #include <memory>
+#include <vector>
 
 #include "fem/quasi_static_solver.h"
 #include "haptics/environment.h"
@@ -41,6 +42,7 @@ class FemEnvironment final : public haptics::Environment {
   NewtonSettings newton_;
   haptics::EnvironmentUpdate last_good_;
   bool follow_ = true;
+  std::vector<Eigen::Vector3d> anchors_;  // each probe's position when its patch was last placed
   long patch_moves_ = 0;
 };
 

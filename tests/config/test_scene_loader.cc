@@ -2,6 +2,8 @@
 // single broken line (several errors at once, empty and missing files, warnings).
 #include <gtest/gtest.h>
 
+#include <iostream>
+
 #include <fstream>
 
 #include "config/scene_loader.h"
@@ -14,8 +16,15 @@ const std::filesystem::path kData = FETOUCH_TEST_DATA_DIR;
 
 TEST(SceneLoader, ShippedScenesAreValid) {
   int scenes = 0;
+  // The spine scene meshes the shared ultrasound data beside the repository; without it (a clone
+  // elsewhere) its missing volume is the error it should be, and it is left out here.
+  const bool shared = std::filesystem::exists(kSource / ".." / "shared" / "data" / "ultrasound");
   for (const auto& entry : std::filesystem::directory_iterator(kSource / "config/scenes")) {
     if (entry.path().extension() != ".yaml") continue;
+    if (!shared && entry.path().filename() == "spine_phantom.yaml") {
+      std::cout << "[ skip ] " << entry.path() << ": no shared data beside the repository\n";
+      continue;
+    }
     ++scenes;
     EXPECT_NO_THROW(load_scene(entry.path())) << entry.path();
   }
