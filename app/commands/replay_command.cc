@@ -2,6 +2,7 @@
 // trajectory, or the virtual operator pulled along it), rendered by the 1 kHz loop against the FEM
 // tissue in lockstep (app/session.h), recorded to HDF5 with a summary.
 #include <CLI/CLI.hpp>
+#include <mpi.h>
 
 #include <chrono>
 #include <filesystem>
@@ -57,6 +58,88 @@ haptics::HapticLoopSettings loop_settings(const config::Scene& scene) {
   s.safety.watchdog_timeout_s = h.watchdog_timeout_s;
   return s;
 }
+
+// Under MPI every rank steps the solver together (ARCHITECTURE.md section 5): rank 0 runs the
+// session (haptic and I/O threads, recording) against this environment, which broadcasts each
+// request to the other ranks before taking its own part in the collective solve; the other ranks
+// serve() the same requests until rank 0 stops them. Deformed meshes are written by all ranks
+// together (a piece per rank, gathered by a PVTU).
+class DistributedEnvironment final : public haptics::Environment {
+ public:
+  DistributedEnvironment(fem::FemEnvironment& inner, int contacts) : inner_(inner), contacts_(contacts) {
+    MPI_Comm_rank(MPI_COMM_WORLD, &rank_);
+  }
+  // Rank 0: stops the other ranks (also when the session ended in an exception).
+  ~DistributedEnvironment() override {
+    if (rank_ == 0 && !stopped_) command(kStop, 0);
+  }
+  int contacts() const override { return contacts_; }
+  void initial(haptics::EnvironmentUpdate& out) override {
+    command(kInitial, 0);
+    inner_.initial(out);
+  }
+  void solve(const std::vector<haptics::ContactSample>& samples, long frame, haptics::EnvironmentUpdate& out) override {
+    command(kSolve, frame);
+    pack(samples);
+    MPI_Bcast(buffer_.data(), static_cast<int>(buffer_.size()), MPI_DOUBLE, 0, MPI_COMM_WORLD);
+    inner_.solve(samples, frame, out);
+  }
+  // Rank 0: every rank writes its piece; returns the PVTU's file name.
+  std::string write_mesh(const std::string& directory, const std::string& name, long counter) {
+    command(kMesh, counter);
+    return inner_.solver().write_vtu_pieces(directory, name, static_cast<unsigned int>(counter));
+  }
+  void stop() {
+    command(kStop, 0);
+    stopped_ = true;
+  }
+  // The other ranks: the requests of rank 0, until it stops.
+  void serve(const std::string& directory, const std::string& name) {
+    haptics::EnvironmentUpdate out;
+    std::vector<haptics::ContactSample> samples(static_cast<std::size_t>(contacts_));
+    for (;;) {
+      long message[2];
+      MPI_Bcast(message, 2, MPI_LONG, 0, MPI_COMM_WORLD);
+      if (message[0] == kStop) return;
+      if (message[0] == kInitial) inner_.initial(out);
+      if (message[0] == kMesh) inner_.solver().write_vtu_pieces(directory, name, static_cast<unsigned int>(message[1]));
+      if (message[0] == kSolve) {
+        buffer_.resize(8 * samples.size());
+        MPI_Bcast(buffer_.data(), static_cast<int>(buffer_.size()), MPI_DOUBLE, 0, MPI_COMM_WORLD);
+        unpack(samples);
+        inner_.solve(samples, message[1], out);
+      }
+    }
+  }
+
+ private:
+  enum : long { kStop = 0, kInitial = 1, kSolve = 2, kMesh = 3 };
+  void command(long what, long argument) {
+    long message[2] = {what, argument};
+    MPI_Bcast(message, 2, MPI_LONG, 0, MPI_COMM_WORLD);
+  }
+  void pack(const std::vector<haptics::ContactSample>& samples) {
+    buffer_.clear();
+    for (const auto& s : samples) {
+      buffer_.insert(buffer_.end(), {s.position.x(), s.position.y(), s.position.z(), s.force.x(), s.force.y(), s.force.z(),
+                                     s.normal_force, s.in_contact ? 1.0 : 0.0});
+    }
+  }
+  void unpack(std::vector<haptics::ContactSample>& samples) const {
+    for (std::size_t c = 0; c < samples.size(); ++c) {
+      const double* b = buffer_.data() + 8 * c;
+      samples[c].position = {b[0], b[1], b[2]};
+      samples[c].force = {b[3], b[4], b[5]};
+      samples[c].normal_force = b[6];
+      samples[c].in_contact = b[7] != 0;
+    }
+  }
+
+  fem::FemEnvironment& inner_;
+  int contacts_, rank_ = 0;
+  bool stopped_ = false;
+  std::vector<double> buffer_;
+};
 
 haptics::Trajectory probe_trajectory(const config::Probe& probe, int index, const ReplayOptions& o) {
   const fs::path file = (index == 0 && !o.trajectory.empty()) ? fs::path(o.trajectory) : probe.device.trajectory;
@@ -269,6 +352,17 @@ SessionSummary run_session(const config::Scene& scene, const ReplayOptions& o, c
     session.probes.push_back(probe.name);
   }
   fem::FemEnvironment environment(std::move(model->solver), model->newton);
+  // Under MPI, rank 0 runs the session; the other ranks serve its solves until it is over.
+  int rank = 0;
+  MPI_Comm_rank(MPI_COMM_WORLD, &rank);
+  std::optional<DistributedEnvironment> distributed;
+  if (environment.solver().ranks() > 1) distributed.emplace(environment, static_cast<int>(scene.probes.size()));
+  haptics::Environment& tissue = distributed ? static_cast<haptics::Environment&>(*distributed) : environment;
+  const std::string mesh_dir = out ? (*out / "mesh").string() : std::string();
+  if (distributed && rank != 0) {
+    distributed->serve(mesh_dir, scene.name);
+    return SessionSummary{};
+  }
   std::vector<std::pair<double, std::string>> meshes;
   if (out) {
     fs::create_directories(*out);
@@ -278,14 +372,20 @@ SessionSummary run_session(const config::Scene& scene, const ReplayOptions& o, c
     session.header.scene_text = scene.text;
     session.header.local_model = config::to_string(scene.haptics.local_model);
     session.header.hold = config::to_string(scene.haptics.hold);
-    // The deformed tissue every mesh_every frames (and at rest), as VTU files listed in a PVD.
-    const auto write_mesh = [&environment, &meshes, &scene, out](long frame, double time_s) {
+    // The deformed tissue every mesh_every frames (and at rest), as VTU files listed in a PVD (in
+    // parallel: a piece per rank, gathered by a PVTU).
+    const auto write_mesh = [&environment, &distributed, &meshes, &scene, &mesh_dir, out](long frame, double time_s) {
+      if (distributed) {
+        const std::string pvtu = distributed->write_mesh(mesh_dir, scene.name, frame);
+        meshes.emplace_back(time_s, "mesh/" + fs::path(pvtu).filename().string());
+        return;
+      }
       const std::string name = "mesh/" + scene.name + "_" + std::to_string(frame) + ".vtu";
       environment.solver().write_vtu((*out / name).string());
       meshes.emplace_back(time_s, name);
     };
     if (o.mesh_every > 0) {
-      fs::create_directories(*out / "mesh");
+      fs::create_directories(mesh_dir);
       write_mesh(0, 0);
     }
     session.after_frame = [write_mesh, every = o.mesh_every](const FrameRecord& f) {
@@ -296,8 +396,10 @@ SessionSummary run_session(const config::Scene& scene, const ReplayOptions& o, c
   }
   const bool realtime = out && o.clock == "realtime";  // the comparison runs are lockstep
   log::info() << "replaying " << scene.probes.size() << " probe(s) " << (realtime ? "in real time" : "in lockstep")
-              << ", N = " << settings.ratio << ", " << model_name(settings.local_model) << " with " << hold_name(settings.hold);
-  SessionSummary summary = realtime ? run_realtime(environment, devices, session) : run_lockstep(environment, devices, session);
+              << ", N = " << settings.ratio << ", " << model_name(settings.local_model) << " with " << hold_name(settings.hold)
+              << (distributed ? ", the solver on " + std::to_string(environment.solver().ranks()) + " MPI ranks" : "");
+  SessionSummary summary = realtime ? run_realtime(tissue, devices, session) : run_lockstep(tissue, devices, session);
+  if (distributed) distributed->stop();
   if (!meshes.empty()) write_pvd(*out / (scene.name + ".pvd"), meshes);
   return summary;
 }
@@ -312,6 +414,10 @@ int run_replay(const ReplayOptions& o) {
     return kExitBadInput;
   }
   ensure_mpi();
+  int rank = 0, ranks = 1;
+  MPI_Comm_rank(MPI_COMM_WORLD, &rank);
+  MPI_Comm_size(MPI_COMM_WORLD, &ranks);
+  if (rank != 0) log::set_level(log::Level::error);  // rank 0 speaks for all
   const fs::path out(o.out), recording = fs::path(o.out) / "recording.h5";
   SessionSummary summary;
   std::vector<Eigen::Vector3d> patches;  // each probe's contact patch centre
@@ -322,8 +428,11 @@ int run_replay(const ReplayOptions& o) {
     if (o.compare_ideal) comparison = compare_with_ideal(scene, o);
   } catch (const std::exception& e) {
     std::cerr << "error: " << o.scene << ": " << e.what() << "\n";
+    // The other ranks may be waiting in a collective call that will never come.
+    if (ranks > 1) MPI_Abort(MPI_COMM_WORLD, kExitBadInput);
     return kExitBadInput;
   }
+  if (rank != 0) return kExitOk;
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   std::ostringstream text;
   write_summary(text, o, scene, summary, patches, recording, seconds, comparison);

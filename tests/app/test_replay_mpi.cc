@@ -1,0 +1,78 @@
+// `fetouch replay` under MPI (issue 6): all ranks step the solver together, rank 0 runs the session.
+// On 2 ranks the block poke renders the serial run's forces (the parallel solve differs only by
+// round-off: the tolerance is 1e-6 of the force), and its deformed meshes (a piece per rank,
+// gathered by PVTUs listed in the PVD) hold the serial mesh's cells and displacements.
+#include <gtest/gtest.h>
+#include <vtkDataArray.h>
+#include <vtkNew.h>
+#include <vtkPointData.h>
+#include <vtkUnstructuredGrid.h>
+#include <vtkXMLPUnstructuredGridReader.h>
+#include <vtkXMLUnstructuredGridReader.h>
+
+#include <cmath>
+#include <filesystem>
+
+#include "app/recording.h"
+#include "tests/support/run_command.h"
+
+namespace fetouch::testing {
+namespace {
+
+namespace fs = std::filesystem;
+
+double largest_displacement(vtkUnstructuredGrid* grid) {
+  vtkDataArray* u = grid->GetPointData()->GetArray("displacement");
+  if (!u) return -1;
+  double largest = 0;
+  for (vtkIdType i = 0; i < u->GetNumberOfTuples(); ++i) {
+    const double* d = u->GetTuple3(i);
+    largest = std::max(largest, std::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]));
+  }
+  return largest;
+}
+
+TEST(ReplayMpi, TwoRanksRenderTheSerialForcesAndWriteThePieces) {
+  const fs::path dir = fs::temp_directory_path() / ("fetouch_replay_mpi_" + std::to_string(::getpid()));
+  fs::remove_all(dir);
+  const std::string scene = std::string(FETOUCH_SOURCE_DIR) + "/config/scenes/block_press.yaml";
+  const std::string args = " --mesh-every 20 " + scene + " --out ";
+  const auto serial = run_command(fetouch("replay" + args + (dir / "serial").string()));
+  ASSERT_EQ(serial.exit_code, 0) << serial.err;
+  const auto parallel = run_command(std::string(FETOUCH_MPIEXEC) + " --allow-run-as-root --oversubscribe -np 2 " +
+                                    fetouch("replay" + args + (dir / "parallel").string()));
+  ASSERT_EQ(parallel.exit_code, 0) << parallel.err;
+  EXPECT_NE(parallel.err.find("on 2 MPI ranks"), std::string::npos) << parallel.err;
+
+  const auto a = app::read_recording(dir / "serial" / "recording.h5").devices.at(0).samples;
+  const auto b = app::read_recording(dir / "parallel" / "recording.h5").devices.at(0).samples;
+  ASSERT_EQ(a.size(), 3001u);
+  ASSERT_EQ(b.size(), a.size());
+  double largest = 0, difference = 0;
+  for (std::size_t k = 0; k < a.size(); ++k) {
+    largest = std::max(largest, a[k].force.norm());
+    difference = std::max(difference, (a[k].force - b[k].force).norm());
+  }
+  std::printf("largest force %.6f N; largest difference between 1 and 2 ranks %.3g N\n", largest, difference);
+  EXPECT_GT(largest, 1.0);
+  EXPECT_LE(difference, 1e-6 * largest);
+
+  // Frame 40 (t = 2 s, mid-hold): the serial VTU against the parallel PVTU.
+  vtkNew<vtkXMLUnstructuredGridReader> one;
+  one->SetFileName((dir / "serial" / "mesh" / "block_press_40.vtu").c_str());
+  one->Update();
+  vtkNew<vtkXMLPUnstructuredGridReader> pieces;
+  pieces->SetFileName((dir / "parallel" / "mesh" / "block_press_0040.pvtu").c_str());
+  pieces->Update();
+  ASSERT_GT(one->GetOutput()->GetNumberOfCells(), 0);
+  EXPECT_EQ(pieces->GetOutput()->GetNumberOfCells(), one->GetOutput()->GetNumberOfCells());
+  const double u1 = largest_displacement(one->GetOutput()), u2 = largest_displacement(pieces->GetOutput());
+  std::printf("largest displacement at 2 s: %.6f mm serial, %.6f mm on 2 ranks\n", 1e3 * u1, 1e3 * u2);
+  EXPECT_GT(u1, 0.005);
+  EXPECT_NEAR(u2, u1, 1e-6 * u1);
+  EXPECT_NE(read_file_text(dir / "parallel" / "block_press.pvd").find("mesh/block_press_0040.pvtu"), std::string::npos);
+  fs::remove_all(dir);
+}
+
+}  // namespace
+}  // namespace fetouch::testing
