@@ -229,7 +229,7 @@ SessionSummary run_realtime(haptics::Environment& environment, std::vector<std::
   // Four seconds of ticks: the I/O thread drains it every few milliseconds.
   haptics::SpscRing<DeviceSample> ring(static_cast<std::size_t>(m) * 4096);
   std::vector<double> starts(static_cast<std::size_t>(ticks)), lateness(static_cast<std::size_t>(ticks));
-  std::atomic<bool> haptic_done{false}, solver_done{false}, abort{false};
+  std::atomic<bool> haptic_done{false}, solver_done{false}, stopping{false};
   std::atomic<long> skipped{0}, dropped{0}, tick_overruns{0};
   std::atomic<bool> priority_granted{false};
   long ran = 0;  // ticks the haptic thread ran (read after it joined)
@@ -252,7 +252,7 @@ SessionSummary run_realtime(haptics::Environment& environment, std::vector<std::
     std::vector<DeviceSample> block(static_cast<std::size_t>(m));
     prctl(PR_SET_TIMERSLACK, 1UL, 0, 0, 0);  // wake-ups on time, not up to 50 us late
     timespec deadline = origin, wake{}, now{};
-    for (long k = 0; k < ticks && !abort.load(std::memory_order_relaxed); ++k) {
+    for (long k = 0; k < ticks && !stopping.load(std::memory_order_relaxed); ++k) {
       // Sleep to just before the deadline, then spin the last stretch: the sleep's own wake-up
       // latency (tens of microseconds on a virtual machine) is spent spinning, not late.
       wake = deadline;
@@ -293,7 +293,7 @@ SessionSummary run_realtime(haptics::Environment& environment, std::vector<std::
     try {
       for (;;) {
         if (!requests.take()) {
-          if (haptic_done.load() || abort.load()) break;
+          if (haptic_done.load() || stopping.load()) break;
           std::this_thread::sleep_for(std::chrono::microseconds(200));
           continue;
         }
@@ -316,7 +316,7 @@ SessionSummary run_realtime(haptics::Environment& environment, std::vector<std::
       }
     } catch (...) {
       solver_error = std::current_exception();
-      abort = true;
+      stopping = true;
     }
     solver_done = true;
   });
@@ -346,7 +346,7 @@ SessionSummary run_realtime(haptics::Environment& environment, std::vector<std::
       }
     } catch (...) {
       io_error = std::current_exception();
-      abort = true;
+      stopping = true;
     }
   });
 

@@ -22,6 +22,7 @@
 #include "app/recording.h"
 #include "haptics/devices.h"
 #include "tests/support/run_command.h"
+#include "tests/support/vtk_fields.h"
 
 namespace fetouch::testing {
 namespace {
@@ -32,14 +33,7 @@ double largest_displacement(const fs::path& vtu) {
   vtkNew<vtkXMLUnstructuredGridReader> reader;
   reader->SetFileName(vtu.string().c_str());
   reader->Update();
-  vtkDataArray* u = reader->GetOutput()->GetPointData()->GetArray("displacement");
-  if (!u) return -1;
-  double largest = 0;
-  for (vtkIdType i = 0; i < u->GetNumberOfTuples(); ++i) {
-    const double* d = u->GetTuple3(i);
-    largest = std::max(largest, std::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]));
-  }
-  return largest;
+  return largest_point_vector(reader->GetOutput());
 }
 
 TEST(ReplayCommand, BlockPokeIsReproducibleAndMatchesTheStaticSolve) {

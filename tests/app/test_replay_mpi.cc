@@ -3,9 +3,7 @@
 // round-off: the tolerance is 1e-6 of the force), and its deformed meshes (a piece per rank,
 // gathered by PVTUs listed in the PVD) hold the serial mesh's cells and displacements.
 #include <gtest/gtest.h>
-#include <vtkDataArray.h>
 #include <vtkNew.h>
-#include <vtkPointData.h>
 #include <vtkUnstructuredGrid.h>
 #include <vtkXMLPUnstructuredGridReader.h>
 #include <vtkXMLUnstructuredGridReader.h>
@@ -15,22 +13,12 @@
 
 #include "app/recording.h"
 #include "tests/support/run_command.h"
+#include "tests/support/vtk_fields.h"
 
 namespace fetouch::testing {
 namespace {
 
 namespace fs = std::filesystem;
-
-double largest_displacement(vtkUnstructuredGrid* grid) {
-  vtkDataArray* u = grid->GetPointData()->GetArray("displacement");
-  if (!u) return -1;
-  double largest = 0;
-  for (vtkIdType i = 0; i < u->GetNumberOfTuples(); ++i) {
-    const double* d = u->GetTuple3(i);
-    largest = std::max(largest, std::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]));
-  }
-  return largest;
-}
 
 TEST(ReplayMpi, TwoRanksRenderTheSerialForcesAndWriteThePieces) {
   const fs::path dir = fs::temp_directory_path() / ("fetouch_replay_mpi_" + std::to_string(::getpid()));
@@ -66,7 +54,7 @@ TEST(ReplayMpi, TwoRanksRenderTheSerialForcesAndWriteThePieces) {
   pieces->Update();
   ASSERT_GT(one->GetOutput()->GetNumberOfCells(), 0);
   EXPECT_EQ(pieces->GetOutput()->GetNumberOfCells(), one->GetOutput()->GetNumberOfCells());
-  const double u1 = largest_displacement(one->GetOutput()), u2 = largest_displacement(pieces->GetOutput());
+  const double u1 = largest_point_vector(one->GetOutput()), u2 = largest_point_vector(pieces->GetOutput());
   std::printf("largest displacement at 2 s: %.6f mm serial, %.6f mm on 2 ranks\n", 1e3 * u1, 1e3 * u2);
   EXPECT_GT(u1, 0.005);
   EXPECT_NEAR(u2, u1, 1e-6 * u1);
