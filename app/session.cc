@@ -108,10 +108,8 @@ class SessionBase {
   void take_frame(const FrameRecord& f, const haptics::GainSelection& selection) {
     solve_times_.push_back(f.solve_s);
     summary_.newton_failures += !f.converged;
-    if (settings_.loop.schedule_gains) {
-      summary_.min_stability_margin = std::min(summary_.min_stability_margin, f.stability_margin);
-      summary_.frames_with_unstable_gains += !selection.stable;
-    }
+    summary_.min_stability_margin = std::min(summary_.min_stability_margin, f.stability_margin);
+    summary_.frames_with_unstable_gains += !selection.stable;
     ++summary_.frames;
     if (writer_) writer_->append(f);
   }

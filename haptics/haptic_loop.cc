@@ -44,10 +44,6 @@ void HapticLoop::prepare(FrameSlot& slot) const {
   for (int c = 0; c < m; ++c) normals.block<3, 1>(3 * c, c) = slot.update.frames[c].normal;
   slot.normal_compliance = normals.transpose() * slot.update.compliance * normals;
   if (!settings_.coupling) slot.normal_compliance = Eigen::MatrixXd(slot.normal_compliance.diagonal().asDiagonal());
-  if (!settings_.schedule_gains) {
-    slot.gains = settings_.gains;
-    return;
-  }
   GainProblem problem;
   problem.local_model = settings_.local_model;
   problem.hold = settings_.hold;
@@ -56,6 +52,13 @@ void HapticLoop::prepare(FrameSlot& slot) const {
   if (slot.update.damping.size()) {
     problem.damping = normals.transpose() * slot.update.damping * normals;
     if (!settings_.coupling) problem.damping = Eigen::MatrixXd(problem.damping.diagonal().asDiagonal());
+  }
+  if (!settings_.schedule_gains) {  // the given gains, and how stable they are for this stiffness
+    slot.gains = settings_.gains;
+    slot.selection.gains = settings_.gains;
+    slot.selection.spectral_radius = robust_spectral_radius(problem, settings_.gains, settings_.selection);
+    slot.selection.stable = slot.selection.spectral_radius < 1;
+    return;
   }
   const LocalModelGains start = published_gains_;  // the producer's own: newest_ belongs to the tick
   slot.selection = select_gains(problem, settings_.selection, &start);

@@ -180,6 +180,9 @@ TEST(ShippedScenes, TheOscillationChecksCatchAnUnstableLoop) {
   std::printf("unstable gains: longest chatter %d ticks, %d of %d holds not decaying, %ld ticks at the 3.3 N clamp\n",
               f.longest_chatter, f.holds_not_decaying, f.holds, f.at_limit);
   EXPECT_TRUE(f.longest_chatter >= 10 || f.holds_not_decaying > 0 || f.at_limit > 0);
+  // And the runtime knows: the fixed gains' robust spectral radius for each frame's stiffness.
+  EXPECT_LT(summary["min_stability_margin"].as<double>(), 0);
+  EXPECT_GT(summary["frames_with_unstable_gains"].as<long>(), 0);
   fs::remove_all(dir);
 }
 
