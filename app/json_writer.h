@@ -28,6 +28,13 @@ class JsonWriter {
   JsonWriter& value(unsigned int number) { return value(static_cast<long>(number)); }
   JsonWriter& value(bool flag);
   JsonWriter& null();
+  // An array of the range's values (numbers, strings, flags).
+  template <class Range>
+  JsonWriter& values(const Range& range) {
+    begin_array();
+    for (const auto& v : range) value(v);
+    return end_array();
+  }
 
   static std::string escape(const std::string& text);
 

@@ -21,11 +21,16 @@ namespace fetouch::app {
 
 namespace {
 
-double percentile(std::vector<double> values, double p) {
-  if (values.empty()) return 0;
+// The median, 99th percentile and largest of `values` (zeros when there are none).
+void spread(std::vector<double> values, double& p50, double& p99, double& max) {
+  p50 = p99 = max = 0;
+  if (values.empty()) return;
   std::sort(values.begin(), values.end());
-  const std::size_t i = static_cast<std::size_t>(std::ceil(p * double(values.size()))) - (p > 0 ? 1 : 0);
-  return values[std::min(i, values.size() - 1)];
+  const auto at = [&](double p) {
+    const std::size_t i = static_cast<std::size_t>(std::ceil(p * double(values.size()))) - 1;
+    return values[std::min(i, values.size() - 1)];
+  };
+  p50 = at(0.5), p99 = at(0.99), max = values.back();
 }
 
 // The frame's row of the recording: the solve's status, the eigenvalues of the condensed normal
@@ -105,11 +110,11 @@ class SessionBase {
     if (writer_) writer_->append(d, samples, count);
   }
 
-  void take_frame(const FrameRecord& f, const haptics::GainSelection& selection) {
+  void take_frame(const FrameRecord& f) {
     solve_times_.push_back(f.solve_s);
     summary_.newton_failures += !f.converged;
     summary_.min_stability_margin = std::min(summary_.min_stability_margin, f.stability_margin);
-    summary_.frames_with_unstable_gains += !selection.stable;
+    summary_.frames_with_unstable_gains += !(f.stability_margin > 0);  // radius >= 1: not robustly stable
     ++summary_.frames;
     if (writer_) writer_->append(f);
   }
@@ -126,9 +131,7 @@ class SessionBase {
 
   SessionSummary finish() {
     if (writer_) writer_->flush();
-    summary_.solve_p50_s = percentile(solve_times_, 0.5);
-    summary_.solve_p99_s = percentile(solve_times_, 0.99);
-    summary_.solve_max_s = solve_times_.empty() ? 0 : *std::max_element(solve_times_.begin(), solve_times_.end());
+    spread(solve_times_, summary_.solve_p50_s, summary_.solve_p99_s, summary_.solve_max_s);
     return std::move(summary_);
   }
 
@@ -181,9 +184,8 @@ SessionSummary run_lockstep(haptics::Environment& environment, std::vector<std::
     ++filled;
     // A frame just promoted (its first tick): record the update the tick now holds.
     if (k % settings.loop.ratio == 0 && k > 0) {
-      const haptics::FrameSlot& held = loop.newest();
-      const FrameRecord f = frame_record(held, k * period);
-      base.take_frame(f, held.selection);
+      const FrameRecord f = frame_record(loop.newest(), k * period);
+      base.take_frame(f);
       if (settings.after_frame) settings.after_frame(f);
     }
     if (filled == batch) drain();
@@ -232,7 +234,7 @@ SessionSummary run_realtime(haptics::Environment& environment, std::vector<std::
   std::atomic<bool> priority_granted{false};
   long ran = 0;  // ticks the haptic thread ran (read after it joined)
   std::mutex frames_mutex;  // between the solver and I/O threads only
-  std::vector<std::pair<FrameRecord, haptics::GainSelection>> frames;
+  std::vector<FrameRecord> frames;
   std::exception_ptr solver_error, io_error;
 
   timespec origin{};
@@ -296,19 +298,15 @@ SessionSummary run_realtime(haptics::Environment& environment, std::vector<std::
           continue;
         }
         const FrameRequest& r = requests.front();
-        haptics::FrameSlot& slot = loop.pending_slot();
-        environment.solve(r.samples, r.frame, slot.update);
-        for (int c = 0; c < m; ++c) slot.normal_force(c) = r.samples[c].normal_force;
-        loop.prepare(slot);
+        const haptics::FrameSlot& slot = loop.fill_answer(environment, r.samples, r.frame);
         timespec now{};
         clock_gettime(CLOCK_MONOTONIC, &now);
         const double arrived = seconds_between(origin, now);
         const FrameRecord f = frame_record(slot, arrived);
-        haptics::GainSelection selection = slot.selection;
         loop.publish();
         {
           std::lock_guard<std::mutex> lock(frames_mutex);
-          frames.emplace_back(f, std::move(selection));
+          frames.push_back(f);
         }
         if (settings.after_frame) settings.after_frame(f);
       }
@@ -324,7 +322,7 @@ SessionSummary run_realtime(haptics::Environment& environment, std::vector<std::
       const std::size_t batch = 1024;
       std::vector<DeviceSample> popped(batch * static_cast<std::size_t>(m));
       std::vector<std::vector<DeviceSample>> per_device(static_cast<std::size_t>(m), std::vector<DeviceSample>(batch));
-      std::vector<std::pair<FrameRecord, haptics::GainSelection>> taken;
+      std::vector<FrameRecord> taken;
       for (;;) {
         const bool finished = haptic_done.load() && solver_done.load();
         const std::size_t n = ring.pop(popped.data(), popped.size()) / static_cast<std::size_t>(m);
@@ -336,7 +334,7 @@ SessionSummary run_realtime(haptics::Environment& environment, std::vector<std::
           std::lock_guard<std::mutex> lock(frames_mutex);
           taken.swap(frames);
         }
-        for (const auto& [f, selection] : taken) base.take_frame(f, selection);
+        for (const FrameRecord& f : taken) base.take_frame(f);
         taken.clear();
         base.flush_if_due();
         if (finished && n == 0) break;
@@ -360,12 +358,8 @@ SessionSummary run_realtime(haptics::Environment& environment, std::vector<std::
   lateness.resize(static_cast<std::size_t>(ran));
   std::vector<double> periods;
   for (std::size_t k = 1; k < starts.size(); ++k) periods.push_back(starts[k] - starts[k - 1]);
-  t.period_p50_s = percentile(periods, 0.5);
-  t.period_p99_s = percentile(periods, 0.99);
-  t.period_max_s = periods.empty() ? 0 : *std::max_element(periods.begin(), periods.end());
-  t.lateness_p50_s = percentile(lateness, 0.5);
-  t.lateness_p99_s = percentile(lateness, 0.99);
-  t.lateness_max_s = lateness.empty() ? 0 : *std::max_element(lateness.begin(), lateness.end());
+  spread(periods, t.period_p50_s, t.period_p99_s, t.period_max_s);
+  spread(lateness, t.lateness_p50_s, t.lateness_p99_s, t.lateness_max_s);
   t.tick_overruns = tick_overruns;
   t.frame_overruns = loop.late_answers();
   t.first_late_tick = loop.first_late_tick();

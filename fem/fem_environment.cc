@@ -50,10 +50,10 @@ void FemEnvironment::solve(const std::vector<haptics::ContactSample>& samples, l
     // 16 mm down it in three frames and Newton failed).
     const Eigen::Vector3d& x = samples[c].position;
     if (!x.allFinite()) continue;
-    const dealii::Tensor<1, 3> n = solver_->patch_normal(c);
-    dealii::Tensor<1, 3> motion;
-    for (int d = 0; d < 3; ++d) motion[d] = x[d] - anchors_[c][d];
-    motion -= (motion * n) * n;
+    // The normal the last answer described (the solver holds that state still).
+    const Eigen::Vector3d& n = last_good_.frames[c].normal;
+    const Eigen::Vector3d along = (x - anchors_[c]) - (x - anchors_[c]).dot(n) * n;
+    const dealii::Tensor<1, 3> motion({along.x(), along.y(), along.z()});
     if (motion.norm() <= 0.25 * solver_->patch_radius(c)) continue;
     try {
       solver_->move_contact_patch(c, solver_->boundary_point_nearest(solver_->patch_center(c) + motion, /*deformed=*/false));

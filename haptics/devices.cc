@@ -37,6 +37,9 @@ Trajectory read_trajectory_csv(const std::filesystem::path& path) {
   Trajectory t;
   std::string line;
   int number = 0;
+  const auto fail = [&](const std::string& what) {
+    throw std::runtime_error(path.string() + ":" + std::to_string(number) + ": " + what);
+  };
   while (std::getline(in, line)) {
     ++number;
     const auto first = line.find_first_not_of(" \t\r");
@@ -46,23 +49,18 @@ Trajectory read_trajectory_csv(const std::filesystem::path& path) {
     std::istringstream cells(line);
     double v[4];
     int n = 0;
+    const std::string not_four = "expected four numbers t, x, y, z, found '" + line + "'";
     while (std::getline(cells, cell, ',')) {
       std::istringstream number_in(cell);
       double x;
       std::string rest;
-      if (n >= 4 || !(number_in >> x) || (number_in >> rest))
-        throw std::runtime_error(path.string() + ":" + std::to_string(number) + ": expected four numbers t, x, y, z, found '" +
-                                 line + "'");
-      if (!std::isfinite(x))
-        throw std::runtime_error(path.string() + ":" + std::to_string(number) + ": a value is not finite: '" + cell + "'");
+      if (n >= 4 || !(number_in >> x) || (number_in >> rest)) fail(not_four);
+      if (!std::isfinite(x)) fail("a value is not finite: '" + cell + "'");
       v[n++] = x;
     }
-    if (n != 4)
-      throw std::runtime_error(path.string() + ":" + std::to_string(number) + ": expected four numbers t, x, y, z, found '" +
-                               line + "'");
+    if (n != 4) fail(not_four);
     if (!t.times_s.empty() && !(v[0] > t.times_s.back()))
-      throw std::runtime_error(path.string() + ":" + std::to_string(number) + ": time " + std::to_string(v[0]) + " s is not after the previous row's " +
-                               std::to_string(t.times_s.back()) + " s");
+      fail("time " + std::to_string(v[0]) + " s is not after the previous row's " + std::to_string(t.times_s.back()) + " s");
     t.times_s.push_back(v[0]);
     t.positions_m.emplace_back(v[1], v[2], v[3]);
   }

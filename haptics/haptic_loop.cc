@@ -69,7 +69,7 @@ void HapticLoop::prepare(FrameSlot& slot) const {
 
 void HapticLoop::promote() noexcept {
   // The old previous goes to the middle, the published update comes out of it.
-  const int published = middle_.exchange(previous_, std::memory_order_acq_rel) & kIndex;
+  const int published = middle_.take(previous_);
   previous_ = newest_;
   newest_ = published;
   newest_arrival_ = tick_count_;
@@ -87,7 +87,7 @@ const std::vector<ContactOutput>& HapticLoop::tick(const std::vector<Eigen::Vect
   const int n = settings_.ratio;
   const int i = static_cast<int>(tick_count_ % n);
   if (i == 0 && tick_count_ > 0) {
-    if (middle_.load(std::memory_order_acquire) & kFresh) {
+    if (middle_.fresh()) {
       promote();
     } else {
       if (late_answers_ == 0) first_late_tick_ = tick_count_;
@@ -153,11 +153,16 @@ const std::vector<ContactOutput>& LockstepSession::tick(const std::vector<Eigen:
   return out;
 }
 
+FrameSlot& HapticLoop::fill_answer(Environment& environment, const std::vector<ContactSample>& samples, long frame) {
+  FrameSlot& slot = pending_slot();
+  environment.solve(samples, frame, slot.update);
+  for (int c = 0; c < contacts_; ++c) slot.normal_force(c) = samples[c].normal_force;
+  prepare(slot);
+  return slot;
+}
+
 void LockstepSession::answer() {
-  FrameSlot& slot = loop_.pending_slot();
-  environment_.solve(loop_.samples(), loop_.frame(), slot.update);
-  for (int c = 0; c < loop_.contacts(); ++c) slot.normal_force(c) = loop_.samples()[c].normal_force;
-  loop_.prepare(slot);
+  loop_.fill_answer(environment_, loop_.samples(), loop_.frame());
   loop_.publish();
 }
 

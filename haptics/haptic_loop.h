@@ -23,7 +23,6 @@
 #include <Eigen/Core>
 
 #include <array>
-#include <atomic>
 #include <vector>
 
 #include "haptics/environment.h"
@@ -31,6 +30,7 @@
 #include "haptics/gain_selection.h"
 #include "haptics/hold.h"
 #include "haptics/local_model.h"
+#include "haptics/lock_free.h"
 
 namespace fetouch::haptics {
 
@@ -89,9 +89,13 @@ class HapticLoop {
   // in another thread. Publishing twice before a promotion replaces the first update.
   FrameSlot& pending_slot() { return slots_[back_]; }
   void prepare(FrameSlot& slot) const;
+  // All of the producer's part but publish(): the environment's answer to `samples` (those of
+  // `frame`) into pending_slot(), the force that produced it (the Smith reference), prepare().
+  FrameSlot& fill_answer(Environment& environment, const std::vector<ContactSample>& samples, long frame);
   void publish() noexcept {
     published_gains_ = slots_[back_].gains;
-    back_ = middle_.exchange(back_ | kFresh, std::memory_order_acq_rel) & kIndex;
+    bool replaced_unread = false;
+    back_ = middle_.publish(back_, replaced_unread);
   }
 
   int contacts() const { return contacts_; }
@@ -107,7 +111,6 @@ class HapticLoop {
 
  private:
   void promote() noexcept;
-  static constexpr int kIndex = 3, kFresh = 4;  // middle_: slot index | kFresh while unread
 
   HapticLoopSettings settings_;
   int contacts_;
@@ -115,7 +118,7 @@ class HapticLoop {
   std::array<FrameSlot, 4> slots_;
   int newest_ = 0, previous_ = 1;          // the tick's
   int back_ = 2;                           // the producer's
-  std::atomic<int> middle_{3};             // exchanged
+  SlotExchange middle_{3};                 // exchanged
   LocalModelGains published_gains_;        // the producer's warm start
   long tick_count_ = 0, newest_arrival_ = 0;
   long late_answers_ = 0, first_late_tick_ = -1;

@@ -13,6 +13,8 @@ namespace fetouch::haptics {
 
 enum class HoldKind { zoh, foh };
 
+inline const char* to_string(HoldKind kind) { return kind == HoldKind::foh ? "foh" : "zoh"; }
+
 // The weight of the newest value at tick i of a frame: 1 for ZOH, i / N for FOH.
 inline double hold_weight(HoldKind kind, int tick_in_frame, int ratio) noexcept {
   return kind == HoldKind::zoh ? 1.0 : static_cast<double>(tick_in_frame) / static_cast<double>(ratio);

@@ -2,6 +2,26 @@
 
 namespace fetouch::haptics {
 
+namespace {
+constexpr LocalModelKind kKinds[] = {LocalModelKind::p, LocalModelKind::pi, LocalModelKind::smith, LocalModelKind::pi_smith};
+constexpr const char* kNames[] = {"p", "pi", "smith", "pi_smith"};
+}  // namespace
+
+const char* to_string(LocalModelKind kind) {
+  for (int i = 0; i < 4; ++i)
+    if (kKinds[i] == kind) return kNames[i];
+  return "?";
+}
+
+bool parse_local_model(const std::string& name, LocalModelKind& kind) {
+  for (int i = 0; i < 4; ++i)
+    if (name == kNames[i]) {
+      kind = kKinds[i];
+      return true;
+    }
+  return false;
+}
+
 LocalModel::LocalModel(LocalModelKind kind, int contacts)
     : kind_(kind),
       compliance_(Eigen::MatrixXd::Zero(contacts, contacts)),

@@ -26,6 +26,8 @@
 
 #include <Eigen/Dense>
 
+#include <string>
+
 namespace fetouch::haptics {
 
 enum class LocalModelKind { p, pi, smith, pi_smith };
@@ -36,6 +38,11 @@ constexpr bool has_integrator(LocalModelKind kind) {
 constexpr bool has_predictor(LocalModelKind kind) {
   return kind == LocalModelKind::smith || kind == LocalModelKind::pi_smith;
 }
+
+// The names scenes and command lines use: "p", "pi", "smith", "pi_smith".
+const char* to_string(LocalModelKind kind);
+// False (and `kind` untouched) for any other name.
+bool parse_local_model(const std::string& name, LocalModelKind& kind);
 
 struct LocalModelGains {
   double proportional = 0;  // Kh

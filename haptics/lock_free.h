@@ -1,5 +1,6 @@
 // Lock-free hand-overs between the haptic thread and the others (ARCHITECTURE.md section 5). Neither
 // side ever waits for the other, allocates or locks:
+//   - SlotExchange: the atomic slot-index swap both slot hand-overs are made of;
 //   - TripleBuffer<T>: one writer, one reader, the reader wants only the newest value. The writer
 //     fills back(), publish() swaps it with the middle slot; the reader's take() swaps the middle
 //     with its front slot when something new is there. A value published twice before a take() is
@@ -14,6 +15,30 @@
 
 namespace fetouch::haptics {
 
+// The atomic core of the slot hand-overs (TripleBuffer below, and HapticLoop's four slots): one
+// slot index in the middle, marked fresh from a publish until a take. The writer swaps its filled
+// slot in; the reader swaps a slot it releases for the fresh one. Each side only ever touches the
+// slots whose indices it holds.
+class SlotExchange {
+ public:
+  explicit SlotExchange(int middle) : middle_(middle) {}
+  // The writer: puts `filled` in the middle and returns the slot it gets back (its next one);
+  // `replaced_unread` says whether that slot held a value never taken.
+  int publish(int filled, bool& replaced_unread) noexcept {
+    const int old = middle_.exchange(filled | kFresh, std::memory_order_acq_rel);
+    replaced_unread = (old & kFresh) != 0;
+    return old & kIndex;
+  }
+  // The reader: whether a value was published since its last take().
+  bool fresh() const noexcept { return (middle_.load(std::memory_order_acquire) & kFresh) != 0; }
+  // The reader, after fresh(): puts `released` in the middle, returns the freshly published slot.
+  int take(int released) noexcept { return middle_.exchange(released, std::memory_order_acq_rel) & kIndex; }
+
+ private:
+  static constexpr int kIndex = 3, kFresh = 4;  // up to four slots
+  std::atomic<int> middle_;
+};
+
 template <class T>
 class TripleBuffer {
  public:
@@ -24,25 +49,24 @@ class TripleBuffer {
   T& back() { return slots_[back_]; }  // the writer's slot
   // Makes back() the newest value. Returns false when the value it replaces was never taken.
   bool publish() noexcept {
-    const int old = middle_.exchange(back_ | kFresh, std::memory_order_acq_rel);
-    back_ = old & kIndex;
-    return !(old & kFresh);
+    bool replaced_unread = false;
+    back_ = middle_.publish(back_, replaced_unread);
+    return !replaced_unread;
   }
 
   // The reader: true (and front() is the newest value) when something was published since the
   // last take().
   bool take() noexcept {
-    if (!(middle_.load(std::memory_order_acquire) & kFresh)) return false;
-    front_ = middle_.exchange(front_, std::memory_order_acq_rel) & kIndex;
+    if (!middle_.fresh()) return false;
+    front_ = middle_.take(front_);
     return true;
   }
   const T& front() const { return slots_[front_]; }
 
  private:
-  static constexpr int kIndex = 3, kFresh = 4;
   T slots_[3];
   int back_ = 0, front_ = 1;
-  std::atomic<int> middle_{2};
+  SlotExchange middle_{2};
 };
 
 template <class T>

@@ -77,9 +77,7 @@ int run_phantom(const PhantomOptions& o) {
   json.key("dimensions").begin_array();
   for (int d : phantom.image.dimensions) json.value(static_cast<long>(d));
   json.end_array();
-  json.key("origin_mm").begin_array();
-  for (double x : phantom.image.origin_mm) json.value(x);
-  json.end_array();
+  json.key("origin_mm").values(phantom.image.origin_mm);
   json.key("speckle").value(settings.speckle);
   json.key("label_volumes_ml").begin_object();
   for (const auto& [label, ml] : volume_ml) json.key(label_name(label)).value(ml);

@@ -59,9 +59,7 @@ int run_reconstruct(const ReconstructOptions& o) {
     for (int d : v.dimensions) json.value(static_cast<long>(d));
     json.end_array();
     json.key("spacing_mm").value(o.spacing_mm);
-    json.key("origin_mm").begin_array();
-    for (double x : v.origin_mm) json.value(x);
-    json.end_array();
+    json.key("origin_mm").values(v.origin_mm);
     json.key("frames_used").value(static_cast<long>(result.frames_used));
     json.key("frames_skipped").value(static_cast<long>(result.frames_skipped));
     json.key("filled_fraction").value(result.filled_fraction);

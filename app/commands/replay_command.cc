@@ -42,9 +42,7 @@ struct ReplayOptions {
 haptics::HapticLoopSettings loop_settings(const config::Scene& scene) {
   const config::Haptics& h = scene.haptics;
   haptics::HapticLoopSettings s;
-  static const haptics::LocalModelKind models[] = {haptics::LocalModelKind::p, haptics::LocalModelKind::pi,
-                                                   haptics::LocalModelKind::smith, haptics::LocalModelKind::pi_smith};
-  s.local_model = models[static_cast<int>(h.local_model)];
+  haptics::parse_local_model(config::to_string(h.local_model), s.local_model);  // the same names
   s.hold = h.hold == config::HoldType::foh ? haptics::HoldKind::foh : haptics::HoldKind::zoh;
   s.ratio = h.ratio(scene.solver);
   s.period_s = 1 / h.rate_hz;
@@ -162,17 +160,6 @@ haptics::Trajectory probe_trajectory(const config::Probe& probe, int index, cons
 SessionSummary run_session(const config::Scene& scene, const ReplayOptions& o, const haptics::HapticLoopSettings& settings,
                            const fs::path* out, bool keep_forces, std::vector<Eigen::Vector3d>* patches = nullptr);
 
-const char* model_name(haptics::LocalModelKind k) {
-  switch (k) {
-    case haptics::LocalModelKind::p: return "p";
-    case haptics::LocalModelKind::pi: return "pi";
-    case haptics::LocalModelKind::smith: return "smith";
-    case haptics::LocalModelKind::pi_smith: return "pi_smith";
-  }
-  return "?";
-}
-const char* hold_name(haptics::HoldKind h) { return h == haptics::HoldKind::foh ? "foh" : "zoh"; }
-
 // The multirate local models against the ideal reference: the same session with the solver at
 // the haptic rate (N = 1). Per local model and hold, per probe: the RMS of the force error
 // relative to the ideal force's RMS, the peak error, and the 2 % settling time of the force after
@@ -227,7 +214,7 @@ IdealComparison compare_with_ideal(const config::Scene& scene, const ReplayOptio
       s.local_model = model, s.hold = h;
       const SessionSummary run = run_session(scene, o, s, nullptr, true);
       PairError e;
-      e.model = model_name(model), e.hold = hold_name(h);
+      e.model = haptics::to_string(model), e.hold = haptics::to_string(h);
       for (std::size_t p = 0; p < probes; ++p) {
         double error2 = 0, ideal2 = 0, peak = 0;
         const std::size_t n = std::min(run.forces[p].size(), ideal.forces[p].size());
@@ -262,21 +249,16 @@ void write_summary(std::ostream& out, const ReplayOptions& o, const config::Scen
   json.end_array();
   json.key("ticks").value(s.ticks);
   json.key("frames").value(s.frames);
-  json.key("solve_s").begin_object();
-  json.key("p50").value(s.solve_p50_s);
-  json.key("p99").value(s.solve_p99_s);
-  json.key("max").value(s.solve_max_s);
-  json.end_object();
+  const auto spread = [&json](const char* name, double p50, double p99, double max) {
+    json.key(name).begin_object().key("p50").value(p50).key("p99").value(p99).key("max").value(max).end_object();
+  };
+  spread("solve_s", s.solve_p50_s, s.solve_p99_s, s.solve_max_s);
   // Lockstep: the solver always finishes within its frame, and the clock is simulated.
   json.key("overruns").value(s.timing.frame_overruns);
   if (o.clock == "realtime") {
     const TimingSummary& t = s.timing;
-    json.key("tick_period_s").begin_object();
-    json.key("p50").value(t.period_p50_s).key("p99").value(t.period_p99_s).key("max").value(t.period_max_s);
-    json.end_object();
-    json.key("tick_lateness_s").begin_object();
-    json.key("p50").value(t.lateness_p50_s).key("p99").value(t.lateness_p99_s).key("max").value(t.lateness_max_s);
-    json.end_object();
+    spread("tick_period_s", t.period_p50_s, t.period_p99_s, t.period_max_s);
+    spread("tick_lateness_s", t.lateness_p50_s, t.lateness_p99_s, t.lateness_max_s);
     json.key("first_late_tick").value(t.first_late_tick);
     json.key("tick_overruns").value(t.tick_overruns);
     json.key("skipped_frames").value(t.skipped_frames);
@@ -292,23 +274,15 @@ void write_summary(std::ostream& out, const ReplayOptions& o, const config::Scen
   if (comparison) {
     json.key("compare_ideal").begin_object();
     json.key("hold_s").begin_array().value(comparison->hold_start_s).value(comparison->hold_end_s).end_array();
-    json.key("ideal_settling_s").begin_array();
-    for (double x : comparison->ideal_settling_s) json.value(x);
-    json.end_array();
+    json.key("ideal_settling_s").values(comparison->ideal_settling_s);
     json.key("pairs").begin_array();
     for (const auto& e : comparison->pairs) {
       json.begin_object();
       json.key("local_model").value(e.model);
       json.key("hold").value(e.hold);
-      json.key("rms_error_relative").begin_array();
-      for (double x : e.rms_relative) json.value(x);
-      json.end_array();
-      json.key("peak_error_n").begin_array();
-      for (double x : e.peak_n) json.value(x);
-      json.end_array();
-      json.key("settling_s").begin_array();
-      for (double x : e.settling_s) json.value(x);
-      json.end_array();
+      json.key("rms_error_relative").values(e.rms_relative);
+      json.key("peak_error_n").values(e.peak_n);
+      json.key("settling_s").values(e.settling_s);
       json.end_object();
     }
     json.end_array();
@@ -397,7 +371,7 @@ SessionSummary run_session(const config::Scene& scene, const ReplayOptions& o, c
   }
   const bool realtime = out && o.clock == "realtime";  // the comparison runs are lockstep
   log::info() << "replaying " << scene.probes.size() << " probe(s) " << (realtime ? "in real time" : "in lockstep")
-              << ", N = " << settings.ratio << ", " << model_name(settings.local_model) << " with " << hold_name(settings.hold)
+              << ", N = " << settings.ratio << ", " << haptics::to_string(settings.local_model) << " with " << haptics::to_string(settings.hold)
               << (distributed ? ", the solver on " + std::to_string(environment.solver().ranks()) + " MPI ranks" : "");
   SessionSummary summary = realtime ? run_realtime(tissue, devices, session) : run_lockstep(tissue, devices, session);
   if (distributed) distributed->stop();

@@ -266,10 +266,8 @@ std::string complex_text(std::complex<double> z) {
 
 int run_stability(const StabilityOptions& o) {
   using namespace haptics;
-  const LocalModelKind kind = o.local_model == "p"       ? LocalModelKind::p
-                              : o.local_model == "pi"    ? LocalModelKind::pi
-                              : o.local_model == "smith" ? LocalModelKind::smith
-                                                         : LocalModelKind::pi_smith;
+  LocalModelKind kind = LocalModelKind::pi_smith;
+  parse_local_model(o.local_model, kind);  // one of the four: the option accepts nothing else
   const HoldKind hold = o.hold == "zoh" ? HoldKind::zoh : HoldKind::foh;
   const bool integral = has_integrator(kind);
   if (!integral && o.ni != 0) {

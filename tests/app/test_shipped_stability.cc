@@ -22,6 +22,7 @@
 
 #include "app/recording.h"
 #include "tests/support/run_command.h"
+#include "tests/support/scene_variant.h"
 
 namespace fetouch::testing {
 namespace {
@@ -146,7 +147,9 @@ TEST(ShippedScenes, NoForceOscillationGrowsAndEveryFrameIsStable) {
       EXPECT_EQ(f.at_limit, 0);  // never even at the clamp
       EXPECT_EQ(f.holds_not_decaying, 0);
       EXPECT_LT(f.longest_chatter, 10) << "the force chatters at the haptic rate";
-      if (c.holds) EXPECT_GE(f.holds, 1);  // the poke's or squeeze's hold at least
+      if (c.holds) {
+        EXPECT_GE(f.holds, 1);  // the poke's or squeeze's hold at least
+      }
       std::printf("%s %s probe %s: max force %.3f N (limit %.1f), smallest margin %.3f, %d holds, all decaying\n",
                   c.scene.c_str(), c.trajectory.c_str(), device.name.c_str(), f.largest, max_force, smallest_margin, f.holds);
     }
@@ -162,13 +165,8 @@ TEST(ShippedScenes, TheOscillationChecksCatchAnUnstableLoop) {
   const fs::path source = fs::path(FETOUCH_SOURCE_DIR) / "config" / "scenes";
   const fs::path dir = fs::temp_directory_path() / ("fetouch_unstable_" + std::to_string(::getpid()));
   fs::create_directories(dir);
-  std::string text = read_file_text(source / "block_press.yaml");
-  const std::size_t at = text.find("gains: auto");
-  ASSERT_NE(at, std::string::npos);
-  text.replace(at, 11, "gains: {proportional_n_per_m: 4000, integral_n_per_m: 40}");
-  for (std::size_t t; (t = text.find(" trajectories/")) != std::string::npos;)
-    text.replace(t, 14, " " + (source / "trajectories").string() + "/");
-  std::ofstream(dir / "unstable.yaml") << text;
+  ASSERT_TRUE(write_scene_variant(source / "block_press.yaml", "gains: auto",
+                                  "gains: {proportional_n_per_m: 4000, integral_n_per_m: 40}", dir / "unstable.yaml"));
   YAML::Node summary;
   const fs::path shortened = dir / "poke.csv";
   {

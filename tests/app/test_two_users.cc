@@ -17,6 +17,7 @@
 
 #include "app/recording.h"
 #include "tests/support/run_command.h"
+#include "tests/support/scene_variant.h"
 
 namespace fetouch::testing {
 namespace {
@@ -83,13 +84,8 @@ TEST(TwoUsers, EachFeelsTheOtherAsTheFemPredicts) {
   const fs::path source = fs::path(FETOUCH_SOURCE_DIR) / "config" / "scenes";
   const fs::path scene = source / "fetus_two_users.yaml";
   // The same scene with the local model's coupling off (trajectories by absolute path).
-  std::string text = read_file_text(scene);
-  ASSERT_NE(text.find("coupling: true"), std::string::npos);
-  text.replace(text.find("coupling: true"), 14, "coupling: false");
-  for (std::size_t at; (at = text.find(" trajectories/")) != std::string::npos;)
-    text.replace(at, 14, " " + (source / "trajectories").string() + "/");
   const fs::path uncoupled_scene = dir / "uncoupled.yaml";
-  std::ofstream(uncoupled_scene) << text;
+  ASSERT_TRUE(write_scene_variant(scene, "coupling: true", "coupling: false", uncoupled_scene));
 
   const Session coupled = replay(scene, dir / "coupled");
   const Session uncoupled = replay(uncoupled_scene, dir / "uncoupled");
