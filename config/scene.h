@@ -117,7 +117,9 @@ struct Effects {
 
 // ---- boundary -----------------------------------------------------------------------------------
 
-enum class BoundaryType { fixed, traction };
+// fixed: u = 0 on the listed components (all three by default); symmetry and roller: u = 0 along
+// the region's normal only, the body slides in the plane (a symmetry plane, a support on rollers).
+enum class BoundaryType { fixed, traction, symmetry, roller };
 enum class SelectorKind { box, physical_group, plane };
 
 struct Selector {
@@ -135,6 +137,9 @@ struct BoundaryRegion {
   BoundaryType type = BoundaryType::fixed;
   Selector select;
   Vec3 traction_pa{0, 0, 0};  // traction only
+  // fixed, symmetry, roller: the displacement components held at zero (x, y, z). For symmetry and
+  // roller, the axis of the plane selector's normal unless `components` names them.
+  std::array<bool, 3> components{true, true, true};
   SourceLocation where;
 };
 
@@ -151,6 +156,17 @@ struct Solver {
   int max_load_step_cuts = 8;
   LinearSolver linear_solver = LinearSolver::automatic;
   int direct_max_dofs = 60000;  // automatic: direct (MUMPS) up to this size, CG + AMG above
+  // The accuracy a frame needs, in the haptic loop's units (0, or `accuracy: none`: off, the
+  // residual tolerances alone): each contact's displacement to within position_m (a fifth of a
+  // Touch / Omni's nominal 0.055 mm position resolution) and no out-of-balance nodal force over
+  // force_n (about 3e-4 of its 3.3 N peak force).
+  double accuracy_position_m = 1e-5;
+  double accuracy_force_n = 1e-3;
+  // The relative error of the condensed compliance W a frame may hand over (the stability region
+  // is robust to 30 %): 1e-4 lets most frames update W in the span of the last one's columns.
+  double accuracy_compliance = 1e-4;
+  // Newton iterations a frame may take before it carries the remainder to the next frame (0: no bound).
+  int frame_newton_iterations = 4;
 };
 
 // ---- haptics ------------------------------------------------------------------------------------

@@ -50,7 +50,9 @@ const Choices<TimeIntegrator> kIntegrators{{"backward_euler", TimeIntegrator::ba
 const Choices<PressureVolumeLaw> kLaws{{"linear", PressureVolumeLaw::linear},
                                        {"isothermal_gas", PressureVolumeLaw::isothermal_gas}};
 const Choices<BoundaryType> kBoundaryTypes{{"fixed", BoundaryType::fixed},
-                                           {"traction", BoundaryType::traction}};
+                                           {"traction", BoundaryType::traction},
+                                           {"symmetry", BoundaryType::symmetry},
+                                           {"roller", BoundaryType::roller}};
 const Choices<LinearSolver> kLinearSolvers{{"auto", LinearSolver::automatic},
                                            {"direct", LinearSolver::direct},
                                            {"cg_amg", LinearSolver::cg_amg}};
@@ -413,6 +415,53 @@ void read_selector(MapView& parent, Selector& out) {
   }
 }
 
+// `components: [x, z]`: a non-empty list of distinct axes.
+bool read_components(MapView& map, std::array<bool, 3>& out) {
+  const Entry e = map.entry("components");
+  Reader& reader = map.reader();
+  const std::string accepted = "a non-empty list of distinct axes among x, y and z, e.g. [x, z]";
+  if (!e.value.IsSequence() || e.value.size() == 0) {
+    reader.error(e.value_mark, e.path,
+                 (e.value.IsSequence() ? std::string("the list is empty") : "got " + detail::describe_node(e.value)) +
+                     "; expected " + accepted);
+    return false;
+  }
+  std::array<bool, 3> components{false, false, false};
+  for (size_t i = 0; i < e.value.size(); ++i) {
+    const YAML::Node item = e.value[i];
+    const std::string name = item.IsScalar() ? item.Scalar() : "";
+    const int axis = name == "x" ? 0 : name == "y" ? 1 : name == "z" ? 2 : -1;
+    const std::string path = e.path + "[" + std::to_string(i) + "]";
+    if (axis < 0) {
+      reader.error(item.Mark(), path,
+                   (item.IsScalar() ? "unknown axis '" + name + "'" : "got " + detail::describe_node(item)) +
+                       "; expected " + accepted);
+      return false;
+    }
+    if (components[axis]) {
+      reader.error(item.Mark(), path, "axis " + name + " is listed twice; expected " + accepted);
+      return false;
+    }
+    components[axis] = true;
+  }
+  out = components;
+  return true;
+}
+
+// symmetry and roller without `components`: the axis of an axis-aligned plane selector's normal.
+void normal_components(Reader& reader, MapView& map, BoundaryRegion& region) {
+  const auto& n = region.select.plane_normal;
+  for (int axis = 0; axis < 3 && region.select.kind == SelectorKind::plane; ++axis)
+    if (std::abs(std::abs(n[axis]) - 1) < 1e-9) {
+      region.components = {axis == 0, axis == 1, axis == 2};
+      return;
+    }
+  reader.error(map.mark(), map.path(),
+               std::string("a ") + to_string(region.type) +
+                   " region holds the displacement along its normal: select it by a plane whose normal is "
+                   "the x, y or z axis, or name the held axes with components: [x, y or z]");
+}
+
 void read_boundary(MapView& scene, std::vector<BoundaryRegion>& out) {
   const Entry e = scene.entry("boundary");
   Reader& reader = scene.reader();
@@ -427,7 +476,7 @@ void read_boundary(MapView& scene, std::vector<BoundaryRegion>& out) {
   for (size_t i = 0; i < e.value.size(); ++i) {
     const YAML::Node item = e.value[i];
     const std::string path = e.path + "[" + std::to_string(i) + "]";
-    MapView map(reader, item, path, item.Mark(), {"name", "type", "select", "traction_pa"});
+    MapView map(reader, item, path, item.Mark(), {"name", "type", "select", "traction_pa", "components"});
     if (!map.valid()) continue;
     BoundaryRegion region;
     region.where = {map.mark().line + 1, map.mark().column + 1};
@@ -438,14 +487,21 @@ void read_boundary(MapView& scene, std::vector<BoundaryRegion>& out) {
         reader.error(map.entry("name").value_mark, map.child_path("name"),
                      "boundary region name '" + region.name + "' is used twice; names must be unique");
     }
-    if (map.choice("type", region.type, kBoundaryTypes, Need::required)) {
-      if (region.type == BoundaryType::traction)
+    const bool typed = map.choice("type", region.type, kBoundaryTypes, Need::required);
+    if (typed) {
+      if (region.type == BoundaryType::traction) {
         map.vec3("traction_pa", region.traction_pa, Need::required);
-      else
-        reject_keys(map, {"traction_pa"}, "by a fixed region");
+        reject_keys(map, {"components"}, "by a traction region");
+      } else {
+        reject_keys(map, {"traction_pa"}, std::string("by a ") + to_string(region.type) + " region");
+      }
     }
     map.require("select", "a box, a physical_group or a plane");
     if (map.has("select")) read_selector(map, region.select);
+    if (typed && region.type != BoundaryType::traction) {
+      if (map.has("components")) read_components(map, region.components);
+      else if (region.type != BoundaryType::fixed && map.has("select")) normal_components(reader, map, region);
+    }
     out.push_back(region);
   }
 }
@@ -456,11 +512,26 @@ void read_solver(MapView& scene, Solver& out) {
   const Entry e = scene.entry("solver");
   Reader& reader = scene.reader();
   MapView map(reader, e.value, e.path, e.key_mark,
-              {"rate_hz", "newton", "linear_solver", "direct_max_dofs"});
+              {"rate_hz", "newton", "linear_solver", "direct_max_dofs", "accuracy", "frame_newton_iterations"});
   if (!map.valid()) return;
   map.number("rate_hz", out.rate_hz, Range::positive());
   map.choice("linear_solver", out.linear_solver, kLinearSolvers);
   map.integer("direct_max_dofs", out.direct_max_dofs, {1, 1e9});
+  map.integer("frame_newton_iterations", out.frame_newton_iterations, {0, 1000});
+  if (map.has("accuracy")) {
+    const Entry a = map.entry("accuracy");
+    if (a.value.IsScalar() && a.value.Scalar() == "none") {
+      out.accuracy_position_m = out.accuracy_force_n = 0;
+      out.accuracy_compliance = 1e-6;
+    } else {
+      MapView accuracy(reader, a.value, a.path, a.key_mark, {"position_m", "force_n", "compliance"});
+      if (accuracy.valid()) {
+        accuracy.number("position_m", out.accuracy_position_m, Range::positive());
+        accuracy.number("force_n", out.accuracy_force_n, Range::positive());
+        accuracy.number("compliance", out.accuracy_compliance, {1e-12, 0.1});
+      }
+    }
+  }
   if (map.has("newton")) {
     const Entry n = map.entry("newton");
     MapView newton(reader, n.value, n.path, n.key_mark,

@@ -1,7 +1,12 @@
 #include "fem/fem_environment.h"
 
 #include <chrono>
+#include <cstdio>
+#include <cstdlib>
 #include <stdexcept>
+#include <string>
+
+#include <Eigen/Cholesky>
 
 namespace fetouch::fem {
 
@@ -69,21 +74,40 @@ void FemEnvironment::solve(const std::vector<haptics::ContactSample>& samples, l
     solver_->set_patch_force(c, force);
   }
   const SolveReport report = solver_->solve(newton_);
+  std::string failure = report.failure;
   if (report.converged) {
     describe(out);
+    // The haptic side needs W symmetric positive definite (its gains are chosen for W^-1); past a
+    // limit point of the tissue it is not: the frame is then reported failed and the last good kept.
+    if (Eigen::LLT<Eigen::MatrixXd>(out.compliance).info() != Eigen::Success)
+      failure = "the condensed compliance is not positive definite (the tissue is past a limit point)";
+  }
+  if (report.converged && failure.empty()) {
     out.status = {};
     last_good_ = out;
   } else {
     out = last_good_;
     out.status = {};
     out.status.converged = false;
-    out.status.message = report.failure;
+    out.status.message = failure;
   }
   out.status.iterations = report.total_iterations;
   if (!report.steps.empty() && !report.steps.back().residuals.empty())
     out.status.residual = report.steps.back().residuals.back();
   out.status.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   out.frame = frame;
+  // FETOUCH_TRACE_FRAMES=1: where each frame's time went, one line per frame on standard error.
+  static const bool trace = std::getenv("FETOUCH_TRACE_FRAMES") != nullptr;
+  if (trace) {
+    const ComplianceTimes& c = solver_->last_compliance_times();
+    std::fprintf(stderr,
+                 "frame %ld: %.1f ms; newton %d%s (assembly %.1f, factor %.1f, solve %.1f ms, cg %d); compliance "
+                 "(assembly %.1f, factor %.1f, solve %.1f ms, cg %d, galerkin %.1e%s)\n",
+                 frame, 1e3 * out.status.seconds, report.total_iterations, report.carried ? " carried" : "",
+                 1e3 * report.assembly_s, 1e3 * report.factorisation_s, 1e3 * report.solve_s, report.linear_iterations,
+                 1e3 * c.assembly_s, 1e3 * c.factorisation_s, 1e3 * c.solves_s, c.linear_iterations, c.galerkin_residual,
+                 c.refined ? ", solved" : "");
+  }
 }
 
 }  // namespace fetouch::fem

@@ -1,21 +1,20 @@
-// A quasi-static hyperelastic solve in total Lagrangian form: find the displacement u with
-//   R(u) = int_Omega P(I + grad u) : grad v dV - int_Gamma_t t . v dA = 0   for all admissible v,
-// prescribed displacements on named boundary regions (per component) and dead-load tractions on
-// others, the load applied in steps lambda = 1/n, 2/n, ..., 1.
-//
+// A hyperelastic body in total Lagrangian form, solved quasi-statically (or one time step per solve
+// with inertia): find the displacement u with
+//   R(u) = int_Omega P(I + grad u) : grad v dV - (loads) . v = 0   for all admissible v,
+// prescribed displacements on named boundary regions (per component), the loads applied in steps.
 // Solves continue: a second solve() starts from the first one's state and moves the loads from
 // their converged values to the new ones (a frame of the haptic loop changes the probe forces).
-// Newton's method with the consistent tangent K = int grad v : A : grad du dV (material.h), a
-// backtracking line search on the residual norm, and automatic load-step cutting: a step whose
-// Newton fails (no convergence, or J <= 0 at a quadrature point, i.e. an inverted element) is rolled
-// back to the last converged state and retried with half the increment, down to a minimum.
-// Linear systems: conjugate gradients on the current tangent, preconditioned by a MUMPS Cholesky
-// factorisation of an earlier one, refactored when it no longer fits (fem/tangent_system.h); so a
-// frame that moves the state a little factorises nothing, and Newton keeps its convergence.
+//
+// This class composes the parts, one concept each (fem/README.md): the discretisation
+// (discretisation.h), the terms of the weak form, each built only when asked for (elasticity_term.h,
+// external_loads.h, inertia_term.h, cavity_term.h, contact_patches.h), the Newton driver that
+// iterates over them (newton_driver.h), the linear systems (linear_system.h, tangent_system.h), the
+// condensed compliance (condensed_compliance.h), boundary geometry (boundary_geometry.h) and output
+// (solver_output.cc). Its interface is the one the environment, the commands and the tests use.
 //
 // Elements: P1/P2 on tetrahedra, Q1/Q2 on hexahedra, chosen from the triangulation's cells and the
-// degree. One MPI rank for now (PETSc objects on MPI_COMM_SELF; MPI must be initialised, by a
-// fem::MpiSession in main); the MPI-parallel version reshapes this class.
+// degree. MPI: all ranks of the communicator step together (MPI must be initialised, by a
+// fem::MpiSession in main).
 #pragma once
 
 #include <deal.II/base/tensor.h>
@@ -30,50 +29,12 @@
 #include <vector>
 
 #include "fem/cavity.h"
+#include "fem/condensed_compliance.h"
+#include "fem/inertia_term.h"
 #include "fem/material.h"
+#include "fem/newton_driver.h"
 
 namespace fetouch::fem {
-
-struct NewtonSettings {
-  double relative_tolerance = 1e-8;  // on the residual norm, against the step's first residual
-  double absolute_tolerance = 1e-12; // N
-  int max_iterations = 25;
-  int load_steps = 1;
-  int max_cuts = 8;                  // a step can be halved this many times
-};
-
-struct StepReport {
-  double load_factor = 0;
-  int iterations = 0;
-  std::vector<double> residuals;  // per Newton iteration
-  bool converged = false;
-  std::string failure;            // why not, empty if converged
-};
-
-struct SolveReport {
-  bool converged = false;
-  int total_iterations = 0;
-  int cuts = 0;
-  std::vector<StepReport> steps;  // every attempt, the failed ones included
-  std::string failure;
-  // Time per phase, seconds: assembly (residual and tangent), factorisation, linear solves.
-  double assembly_s = 0, factorisation_s = 0, solve_s = 0;
-  int linear_iterations = 0;  // CG iterations preconditioned by an earlier factorisation
-  int factorisations = 0;
-};
-
-struct ComplianceTimes {
-  double assembly_s = 0, factorisation_s = 0, solves_s = 0;
-  int linear_iterations = 0, factorisations = 0;
-  double galerkin_residual = 0;  // of the last columns' Galerkin update (0: none)
-  bool refined = false;          // the columns were solved again
-};
-
-// The relative residual to which compliance columns K^-1 h are solved.
-inline constexpr double kComplianceTolerance = 1e-9;
-// The largest relative residual of a Galerkin-updated column accepted without a new solve: the
-// error of W is then of the order of its square, 1e-6 relative.
-inline constexpr double kGalerkinTolerance = 1e-3;
 
 class QuasiStaticSolver {
  public:
@@ -124,28 +85,14 @@ class QuasiStaticSolver {
   double cavity_reference_volume() const;  // m^3
   double cavity_pressure() const;          // Pa
 
-  // Inertia and Rayleigh damping C = alpha M + beta K0: once enabled, each solve() is one time step of
-  // length dt, R(u) + M (a + alpha v) + beta K0 v = 0 at the new time, K0 the tangent of the
-  // reference state (so the damping is linear: a mode of frequency w is damped at the ratio
-  // zeta = alpha / (2 w) + beta w / 2), with
-  //   Newmark (beta, gamma):  a+ = (u+ - u - dt v)/(beta dt^2) - (1 - 2 beta)/(2 beta) a,
-  //                           v+ = v + dt ((1 - gamma) a + gamma a+)      (1/4, 1/2: no dissipation)
-  //   backward Euler:         v+ = (u+ - u)/dt,  a+ = (v+ - v)/dt          (first order, dissipative)
-  // M is the consistent mass matrix of density rho. The state starts at rest.
-  struct Dynamics {
-    double density_kg_per_m3 = 1000;
-    double time_step_s = 0.05;
-    bool newmark = true;  // false: backward Euler
-    double beta = 0.25, gamma = 0.5;
-    double rayleigh_mass_per_s = 0;  // alpha
-    double rayleigh_stiffness_s = 0;  // beta
-  };
+  // Inertia and Rayleigh damping (inertia_term.h): once enabled, each solve() is one time step of
+  // length dt. Throws std::invalid_argument for a non-positive time step or density, or negative
+  // damping coefficients.
+  using Dynamics = fem::Dynamics;
   void enable_dynamics(const Dynamics& dynamics);
 
-  // Contact patches (ARCHITECTURE.md section 4): a probe acts on the surface through a smooth kernel
-  // w(X) = (1 - (d/r)^2)^2 for reference distances d < r from the patch centre, normalised to unit
-  // integral over the boundary. H_a u = int w_a u dA is the patch's displacement; a patch force F_a
-  // is the traction w_a F_a, i.e. the load vector H_a' F_a. Returns the patch's index.
+  // Contact patches (contact_patches.h): a probe's force spread by a smooth kernel over its radius.
+  // Returns the patch's index.
   int add_contact_patch(const dealii::Point<3>& center, double radius);
   void set_patch_force(int patch, const dealii::Tensor<1, 3>& force);  // scaled by the load factor
   // Moves a patch's centre (reference coordinates) and rebuilds its kernel; its force stays. Throws
@@ -170,6 +117,8 @@ class QuasiStaticSolver {
   // definite when the body is supported.
   dealii::FullMatrix<double> compliance();
   const ComplianceTimes& last_compliance_times() const;
+  // The relative error of W a Galerkin update may leave (its residual's square): by default 1e-6.
+  void set_compliance_accuracy(double relative_error);
 
   // The reaction of a boundary region: the force its supports exert on the body, i.e. internal
   // minus external nodal forces summed over the region's degrees of freedom, per component (at
@@ -185,6 +134,8 @@ class QuasiStaticSolver {
 
   unsigned int dofs() const;
   unsigned int cells() const;
+  // The terms a solve assembles, in order (elasticity always; the others only once asked for).
+  std::vector<std::string> terms() const;
 
   // Per-cell figures of the current state (averages over the cell's quadrature points).
   struct CellFields {
@@ -201,10 +152,10 @@ class QuasiStaticSolver {
   // DIRECTORY/NAME_CCCC.pvtu that gathers them (collective; returns the .pvtu's file name).
   std::string write_vtu_pieces(const std::string& directory, const std::string& name, unsigned int counter) const;
 
- private:
-  struct Output;  // deal.II's DataOut and the cell fields it refers to
-  void fill_output(Output& output, bool own_cells_only) const;
+  // The parts (fem/solver_parts.h), for fem/'s own translation units.
   struct Impl;
+
+ private:
   std::unique_ptr<Impl> impl_;
 };
 

@@ -14,6 +14,14 @@
 // Constrained (fixed) unknowns are rows and columns with only a diagonal entry, of the size of the
 // mean free diagonal so that the preconditioner sees a well-scaled matrix.
 //
+// On one rank the factorisation is CHOLMOD's supernodal LL', called directly (cholesky_factor.h),
+// and CG is this class's own. Within haptic frames (begin_frame(true)) a solve never pays a
+// factorisation: when CG needs more than refactor_after_iterations, the current K is handed to a
+// worker thread that factorises it while frames go on with the old factorisation, and the new one is
+// taken up at the start of the frame `swap_after_frames` later (waited for there if not ready, so
+// lockstep replays stay bit-reproducible; undeterministic mode takes it up as soon as it is ready).
+// A K that is not positive definite falls back to PETSc's MUMPS LDL'.
+//
 // Or, selectable (and chosen by size in the scene), CG preconditioned by algebraic multigrid
 // (PETSc's GAMG, told the rigid-body modes as its near-null space), set up again when CG needs half
 // as many iterations again as it did after the last set-up.
@@ -29,6 +37,8 @@
 #include <cstddef>
 #include <memory>
 #include <vector>
+
+#include "fem/cholesky_factor.h"
 
 namespace fetouch::fem {
 
@@ -78,6 +88,16 @@ class TangentSystem {
   SolveStats apply_factorisation(const double* b, double* x, int columns);
   // The next solve factorises the current K first (after load-step cuts, a new pattern, ...).
   void refactor_next() { refactor_ = true; }
+  // The start of a solver call: `frame` true for a haptic frame (factorisations in the background),
+  // false for other solves (a stale factorisation is replaced at once, as before).
+  // Returns the seconds it waited for a background factorisation.
+  double begin_frame(bool frame);  // collective under MPI
+  void set_deterministic(bool on) { deterministic_ = on; }
+  int swap_after_frames = 3;
+  // CG iterations allowed on a stale factorisation while a new one is made in the background.
+  int max_background_cg_iterations = 30;
+  int background_factorisations() const { return background_factorisations_; }
+  double last_background_s() const { return last_background_s_; }  // the worker's last factorisation
   int max_cg_iterations = 8;
   // When CG took more than this many iterations, the next solve refactors.
   int refactor_after_iterations = 5;
@@ -86,6 +106,12 @@ class TangentSystem {
 
  private:
   void factor(SolveStats& stats);
+  bool cholmod() const { return direct_cholmod_; }
+  SolveStats solve_cholmod(const double* b, double* x, double tolerance, bool zero_guess);
+  bool factor_cholmod(SolveStats& stats);  // false: not positive definite (PETSc takes over)
+  void request_background();
+  void push_values();  // tells PETSc the values changed
+  double take_background(bool wait);
   void create_solver(const char* type);
   void gather(double* x) const;  // the owned block of x from each rank, onto every rank
   const char* solver_type_ = nullptr;
@@ -103,6 +129,17 @@ class TangentSystem {
   int factorisations_ = 0;
   struct Petsc;
   std::unique_ptr<Petsc> petsc_;
+  // One rank, factorisation: CHOLMOD directly, a worker for background factorisations.
+  bool direct_cholmod_ = false;
+  std::unique_ptr<CholeskyFactor> factor_;
+  struct Worker;
+  std::unique_ptr<Worker> worker_;
+  bool in_frame_ = false, deterministic_ = true;
+  int frames_since_request_ = -1;  // -1: no background factorisation under way
+  int background_factorisations_ = 0;
+  double last_background_s_ = 0;
+  std::vector<double> r_, z_, p_, q_;  // CG's vectors
+  std::vector<double> snapshot_;       // PETSc: the K to factorise when taken up
 };
 
 }  // namespace fetouch::fem

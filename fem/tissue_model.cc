@@ -74,8 +74,8 @@ std::unique_ptr<TissueModel> build_tissue_model(const config::Scene& scene) {
   model->solver->use_algebraic_multigrid(amg);
   for (const config::BoundaryRegion& region : scene.boundary) {
     const unsigned int id = model->region_ids.at(region.name);
-    if (region.type == config::BoundaryType::fixed) {
-      model->solver->prescribe_displacement(id, {true, true, true}, dealii::Tensor<1, 3>());
+    if (region.type != config::BoundaryType::traction) {  // fixed, symmetry, roller: u = 0 on its components
+      model->solver->prescribe_displacement(id, region.components, dealii::Tensor<1, 3>());
     } else {
       dealii::Tensor<1, 3> t;
       for (int d = 0; d < 3; ++d) t[d] = region.traction_pa[d];
@@ -111,6 +111,11 @@ std::unique_ptr<TissueModel> build_tissue_model(const config::Scene& scene) {
   model->newton.absolute_tolerance = scene.solver.newton_absolute_tolerance;
   model->newton.max_iterations = scene.solver.newton_max_iterations;
   model->newton.max_cuts = scene.solver.max_load_step_cuts;
+  model->newton.line_search = scene.solver.line_search;
+  model->newton.position_tolerance_m = scene.solver.accuracy_position_m;
+  model->newton.force_tolerance_n = scene.solver.accuracy_force_n;
+  model->newton.frame_iterations = scene.solver.frame_newton_iterations;
+  model->solver->set_compliance_accuracy(scene.solver.accuracy_compliance);
   return model;
 }
 

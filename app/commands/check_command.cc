@@ -204,7 +204,14 @@ std::string describe_effects(const config::Effects& e) {
 
 std::string describe_region(const config::BoundaryRegion& b) {
   std::string text = b.name + ": " + config::to_string(b.type);
-  if (b.type == config::BoundaryType::traction) text += " " + vec(b.traction_pa) + " Pa";
+  if (b.type == config::BoundaryType::traction) {
+    text += " " + vec(b.traction_pa) + " Pa";
+  } else if (!(b.components[0] && b.components[1] && b.components[2])) {
+    text += " (u = 0 along";
+    for (int axis = 0; axis < 3; ++axis)
+      if (b.components[axis]) text += std::string(" ") + "xyz"[axis];
+    text += ")";
+  }
   switch (b.select.kind) {
     case config::SelectorKind::box:
       text += " on box " + vec(b.select.box_min) + " to " + vec(b.select.box_max);

@@ -112,7 +112,7 @@ void write_json(std::ostream& out, const SolveOptions& o, const config::Scene& s
     }
     json.key("reactions_n").begin_object();
     for (const auto& region : scene.boundary) {
-      if (region.type != config::BoundaryType::fixed) continue;
+      if (region.type == config::BoundaryType::traction) continue;
       const auto r = solver.boundary_force(model.region_ids.at(region.name));
       json.key(region.name).begin_array().value(r[0]).value(r[1]).value(r[2]).end_array();
     }

@@ -9,6 +9,7 @@
 #include <vtkXMLUnstructuredGridReader.h>
 #include <yaml-cpp/yaml.h>
 
+#include <algorithm>
 #include <cmath>
 #include <fstream>
 #include <iterator>
@@ -114,6 +115,60 @@ TEST(SolveCommand, InertiaMakesADynamicLoadCaseWithATimeSeries) {
 }
 
 // A probe pressing 0.3 N into the block of the shipped scene: the table takes 0.3 N, the probe's
+
+// A symmetry plane: the left half of a block (Q1 hexahedra, the same cells as the full block's left
+// half) with `type: symmetry` on its cut x = 0.05 reproduces the full block's answer, under its own
+// weight and a traction over a band symmetric about the cut. Independent answer: the full model.
+// Tolerance: both solve Newton to 1e-10 relative on identical cells, so they agree to round-off
+// amplified by the conditioning, far below 1e-6 of the displacement.
+TEST(SolveCommand, SymmetryPlaneHalfReproducesTheFullBlock) {
+  const fs::path dir = scratch("symmetry");
+  fs::create_directories(dir);
+  const auto scene = [&](const std::string& name, double length, const std::string& extra) {
+    const fs::path path = dir / (name + ".yaml");
+    std::ofstream(path) << "name: " << name << "\nunits: SI\nmesh:\n"
+                        << "  generate: {shape: box, size_m: [" << length << ", 0.08, 0.05], refinements: 2}\n"
+                        << "  element: q1\n"
+                        << "material: {model: neo_hookean, youngs_modulus_pa: 5000, poisson_ratio: 0.4, "
+                           "density_kg_per_m3: 1050}\n"
+                        << "effects:\n  - gravity\n"
+                        << "solver: {newton: {relative_tolerance: 1.0e-10}}\n"
+                        << "boundary:\n"
+                        << "  - {name: base, type: fixed, select: {physical_group: zmin}}\n"
+                        << "  - {name: press, type: traction, traction_pa: [0, 0, -400], "
+                           "select: {box: {min: [0.03, -1, 0.0499], max: [0.07, 1, 1]}}}\n"
+                        << extra;
+    return path;
+  };
+  const fs::path full = scene("full", 0.1, "");
+  const fs::path half = scene("half", 0.05,
+                              "  - {name: cut, type: symmetry, select: {plane: {point: [0.05, 0, 0], normal: [1, 0, 0]}}}\n");
+  const std::string points = " --point 0.04 0.04 0.05 --point 0.05 0.04 0.05 --point 0.02 0.01 0.025 --point 0.05 0.07 0.03";
+  const auto solve = [&](const fs::path& path, const std::string& name) {
+    const auto r = run_command(fetouch("solve --json --out " + (dir / name).string() + points + " " + path.string()));
+    EXPECT_EQ(r.exit_code, 0) << r.err;
+    return YAML::Load(r.out);
+  };
+  const YAML::Node a = solve(full, "full_out"), b = solve(half, "half_out");
+  ASSERT_TRUE(a["converged"].as<bool>());
+  ASSERT_TRUE(b["converged"].as<bool>());
+  double largest = 0;
+  for (std::size_t p = 0; p < 4; ++p)
+    for (int c = 0; c < 3; ++c) largest = std::max(largest, std::abs(a["points"][p]["displacement_m"][c].as<double>()));
+  ASSERT_GT(largest, 1e-3);  // a real deformation: over a millimetre
+  for (std::size_t p = 0; p < 4; ++p)
+    for (int c = 0; c < 3; ++c)
+      EXPECT_NEAR(b["points"][p]["displacement_m"][c].as<double>(), a["points"][p]["displacement_m"][c].as<double>(),
+                  1e-6 * largest)
+          << "point " << p << ", component " << c;
+  // On the cut the full model moves along the plane only, as the half model's support imposes.
+  EXPECT_LT(std::abs(a["points"][1]["displacement_m"][0].as<double>()), 1e-9);
+  // The half carries half the weight and half the press: its base reaction is half the full one's.
+  EXPECT_NEAR(b["reactions_n"]["base"][2].as<double>(), a["reactions_n"]["base"][2].as<double>() / 2,
+              1e-6 * std::abs(a["reactions_n"]["base"][2].as<double>()));
+  fs::remove_all(dir);
+}
+
 // patch moves down, and the VTU holds the displacement ParaView warps by, with J > 0 everywhere.
 TEST(SolveCommand, PressWritesAVtuThatVtkReadsBack) {
   const fs::path dir = scratch("press");

@@ -31,6 +31,38 @@ TEST(SceneLoader, ShippedScenesAreValid) {
   EXPECT_GE(scenes, 1);
 }
 
+// Supports per component: a listed subset for fixed, the plane's normal axis for symmetry and
+// roller (whichever way the normal points), or the components named; and the accuracy policy.
+TEST(SceneLoader, SupportsPerComponentAndTheAccuracyPolicy) {
+  const std::string text =
+      "name: s\nunits: SI\nmesh:\n  generate: {shape: box, size_m: [0.1, 0.1, 0.1], refinements: 0}\n"
+      "material: {model: neo_hookean, youngs_modulus_pa: 5000, poisson_ratio: 0.3}\n"
+      "boundary:\n"
+      "  - {name: table, type: fixed, components: [x, z], select: {physical_group: zmin}}\n"
+      "  - {name: cut, type: symmetry, select: {plane: {point: [0, 0.05, 0], normal: [0, -2, 0]}}}\n"
+      "  - {name: wall, type: roller, components: [z], select: {box: {min: [-1, -1, 0.099], max: [1, 1, 1]}}}\n"
+      "  - {name: side, type: fixed, select: {physical_group: xmin}}\n"
+      "solver: {accuracy: {position_m: 2.0e-5, force_n: 0.002, compliance: 1.0e-3}, frame_newton_iterations: 2}\n";
+  const Scene s = parse_scene(text, "test", ".").scene;
+  ASSERT_EQ(s.boundary.size(), 4u);
+  EXPECT_EQ(s.boundary[0].components, (std::array<bool, 3>{true, false, true}));
+  EXPECT_EQ(s.boundary[1].type, BoundaryType::symmetry);
+  EXPECT_EQ(s.boundary[1].components, (std::array<bool, 3>{false, true, false}));
+  EXPECT_EQ(s.boundary[2].components, (std::array<bool, 3>{false, false, true}));
+  EXPECT_EQ(s.boundary[3].components, (std::array<bool, 3>{true, true, true}));  // fixed: all by default
+  EXPECT_DOUBLE_EQ(s.solver.accuracy_position_m, 2e-5);
+  EXPECT_DOUBLE_EQ(s.solver.accuracy_force_n, 0.002);
+  EXPECT_DOUBLE_EQ(s.solver.accuracy_compliance, 1e-3);
+  EXPECT_EQ(s.solver.frame_newton_iterations, 2);
+  const Scene off = parse_scene("name: s\nunits: SI\nmesh:\n  generate: {shape: ball, radius_m: 0.05}\n"
+                                "material: {model: neo_hookean, youngs_modulus_pa: 5000, poisson_ratio: 0.3}\n"
+                                "solver: {accuracy: none}\n",
+                                "test", ".")
+                        .scene;
+  EXPECT_EQ(off.solver.accuracy_position_m, 0);
+  EXPECT_EQ(off.solver.accuracy_force_n, 0);
+}
+
 TEST(SceneLoader, ReadsEveryValueOfTheBaseScene) {
   const LoadedScene loaded = load_scene(kData / "config/valid/base.yaml");
   const Scene& s = loaded.scene;

@@ -1,0 +1,104 @@
+#include "fem/cavity_term.h"
+
+#include <cmath>
+#include <stdexcept>
+#include <string>
+
+#include "fem/linear_system.h"
+
+namespace fetouch::fem {
+
+using namespace dealii;
+
+CavityTerm::CavityTerm(const Discretisation& d, unsigned int boundary_id, const CavityLaw& law) : law_(law) {
+  if (d.fe->degree != 1)
+    throw std::invalid_argument("cavity: the wall is taken as flat faces between vertices; use P1 or Q1 elements");
+  if (law.gas ? !(law.initial_pressure_pa > 0) : !(law.bulk_modulus_pa > 0))
+    throw std::invalid_argument("cavity: a gas needs a positive initial pressure, a liquid a positive bulk modulus");
+  std::vector<types::global_dof_index> indices(d.fe->n_dofs_per_cell());
+  for (const auto& cell : d.dof.active_cell_iterators())
+    for (const unsigned int f : cell->face_indices()) {
+      const auto face = cell->face(f);
+      if (!face->at_boundary() || face->boundary_id() != boundary_id) continue;
+      cell->get_dof_indices(indices);
+      const auto triangle = [&](unsigned int a, unsigned int b, unsigned int c) {
+        CavityWall::Triangle t;
+        const unsigned int vs[3] = {a, b, c};
+        for (int v = 0; v < 3; ++v) {
+          // The face vertex's index in the cell, then its dof of each component.
+          unsigned int in_cell = 0;
+          while (cell->vertex_index(in_cell) != face->vertex_index(vs[v])) ++in_cell;
+          for (unsigned int k = 0; k < 3; ++k) {
+            t.dofs[v][k] = static_cast<unsigned int>(indices[d.fe->component_to_system_index(k, in_cell)]);
+            t.position[v][k] = face->vertex(vs[v])[k];
+          }
+        }
+        // Normals out of the cavity, i.e. into this cell.
+        const Point<3> pa = face->vertex(a), pb = face->vertex(b), pc = face->vertex(c);
+        const Tensor<1, 3> normal = cross_product_3d(pb - pa, pc - pa);
+        if (normal * (cell->center() - face->center()) < 0) std::swap(t.dofs[1], t.dofs[2]), std::swap(t.position[1], t.position[2]);
+        wall_.triangles.push_back(t);
+      };
+      if (face->n_vertices() == 3) {
+        triangle(0, 1, 2);
+      } else {  // deal.II's quadrilateral vertices 0, 1, 3, 2 go around the face
+        triangle(0, 1, 3);
+        triangle(0, 3, 2);
+      }
+    }
+  if (wall_.triangles.empty())
+    throw std::invalid_argument("cavity: no boundary face has the cavity's boundary id " + std::to_string(boundary_id));
+  const Vector<double> zero(d.n_dofs());
+  reference_volume_ = wall_.volume(zero.begin());
+  if (!(reference_volume_ > 0))
+    throw std::invalid_argument("cavity: the surface with boundary id " + std::to_string(boundary_id) +
+                                " does not enclose a volume (not closed, or not an inner surface)");
+  g_.reinit(d.n_dofs());
+  pressure_ = step_start_ = law.initial_pressure_pa;
+}
+
+// p g into r (and -p g into `internal`), -p d2V into the tangent, and the law's residual; false if
+// the cavity collapsed (V <= 0).
+bool CavityTerm::assemble(const AssemblyState& state, AssemblyTarget& target) {
+  const Vector<double>& u = state.u;
+  const std::vector<bool>& constrained = target.system->constrained();
+  const double volume = wall_.volume(u.begin());
+  if (!(volume > 0)) return false;
+  const double p = pressure_;
+  volume_residual_ = volume - law_.volume(p, reference_volume_);
+  g_ = 0;
+  wall_.add_gradient(u.begin(), 1.0, g_.begin());
+  for (types::global_dof_index i = 0; i < u.size(); ++i) {
+    if (target.internal) target.internal[i] -= p * g_[i];
+    if (constrained[i]) g_[i] = 0;
+    else target.residual[i] += p * g_[i];
+  }
+  if (target.tangent) {
+    const LinearSystem& system = *target.system;
+    wall_.add_hessian(u.begin(), -p, [&](unsigned int row, unsigned int column, double value) {
+      if (!constrained[row] && !constrained[column]) target.tangent[system.position(int(row), int(column))] += value;
+    });
+    stiffness_ = -1 / law_.volume_derivative(p, reference_volume_);  // -dp/dV of the law
+  }
+  return true;
+}
+
+bool CavityTerm::rank_one(double& c, const Vector<double>*& g) const {
+  c = stiffness_;
+  g = &g_;
+  return stiffness_ != 0;
+}
+
+// The pressure's step: K_s du - g dp = r, g'du - V_law'(p) dp = -(V - V_law), i.e. du = x + y dp,
+// dp = -(r_V + g'x) / (g'y + 1/c); the system's solve gave x + y dp0 for r_V = 0.
+void CavityTerm::complete_step(const LinearSystem& system, Vector<double>& du) {
+  const Vector<double>& y = system.rank_one_solution();
+  const double c = stiffness_, gy = g_ * y;
+  const double gx = (g_ * du) * (1 + c * gy);  // g'x from g'(x + y dp0) = g'x / (1 + c g'y)
+  dp_ = -(volume_residual_ + gx) / (gy + 1 / c);
+  step_start_ = pressure_;
+  du.add(-volume_residual_ / (gy + 1 / c), y);
+  system.constraints().distribute(du);
+}
+
+}  // namespace fetouch::fem

@@ -1,0 +1,43 @@
+// The fluid-filled cavity (cavity.h) as a term: the pressure p is an unknown beside u, with the
+// law's residual V(u) - V_law(p) = 0. The wall carries the load p g (g = dV/du), the sparse tangent
+// gains -p d2V/du2, and eliminating dp adds (-dp/dV) g g' (dense, rank one: the linear system
+// applies it by Sherman-Morrison). Taking p = p(V(u)) instead, a liquid's stiffness K/V0 ~ 1e13 Pa/m^3
+// turns any second-order volume error of a step into a huge force: Newton stalls.
+// The pressure is part of the body's response: it is not scaled by load steps.
+#pragma once
+
+#include <cmath>
+
+#include "fem/cavity.h"
+#include "fem/discretisation.h"
+#include "fem/term.h"
+
+namespace fetouch::fem {
+
+class CavityTerm final : public Term {
+ public:
+  // Throws std::invalid_argument for a surface that encloses no volume, or P2/Q2 elements.
+  CavityTerm(const Discretisation& discretisation, unsigned int boundary_id, const CavityLaw& law);
+  const char* name() const override { return "cavity"; }
+  bool assemble(const AssemblyState& state, AssemblyTarget& target) override;
+  bool rank_one(double& c, const dealii::Vector<double>*& g) const override;
+  void complete_step(const LinearSystem& system, dealii::Vector<double>& du) override;
+  void take_step(double alpha) override { pressure_ = step_start_ + alpha * dp_; }
+  double unknown() const override { return pressure_; }
+  void set_unknown(double value) override { pressure_ = value; }
+  bool satisfied() const override { return std::abs(volume_residual_) <= 1e-10 * reference_volume_; }
+
+  double volume(const dealii::Vector<double>& u) const { return wall_.volume(u.begin()); }
+  double reference_volume() const { return reference_volume_; }
+  double pressure() const { return pressure_; }
+
+ private:
+  CavityLaw law_;
+  CavityWall wall_;
+  double reference_volume_ = 0, stiffness_ = 0;
+  double pressure_ = 0, step_start_ = 0, dp_ = 0;
+  double volume_residual_ = 0;  // V(u) - V_law(p), m^3, at the last assembly
+  dealii::Vector<double> g_;
+};
+
+}  // namespace fetouch::fem

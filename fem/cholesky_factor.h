@@ -1,0 +1,34 @@
+// A sparse Cholesky factorisation K = L L' of a symmetric positive definite matrix (CHOLMOD,
+// supernodal, called directly rather than through PETSc so that a factorisation can run on a worker
+// thread while the solver thread solves with another one: each factor owns its CHOLMOD workspace).
+//
+// The pattern is given once in compressed sparse rows with both triangles (a symmetric CSR is also
+// its own CSC; CHOLMOD reads the upper triangle). The fill-reducing ordering and the symbolic
+// analysis are done at construction; factorise() is the numeric phase only.
+#pragma once
+
+#include <memory>
+
+namespace fetouch::fem {
+
+class CholeskyFactor {
+ public:
+  CholeskyFactor(int rows, const int* row_start, const int* columns);
+  ~CholeskyFactor();
+  CholeskyFactor(const CholeskyFactor&) = delete;
+  CholeskyFactor& operator=(const CholeskyFactor&) = delete;
+
+  // The numeric factorisation of `values` (in the pattern's order). False when K is not positive
+  // definite (a tangent past a limit point): the factor is then unusable.
+  bool factorise(const double* values);
+  bool valid() const { return valid_; }
+  // X = K^-1 B for `columns` right-hand sides, column-major (rows x columns).
+  void solve(const double* b, double* x, int columns = 1);
+
+ private:
+  struct Cholmod;
+  std::unique_ptr<Cholmod> c_;
+  bool valid_ = false;
+};
+
+}  // namespace fetouch::fem

@@ -1,0 +1,96 @@
+#include "fem/condensed_compliance.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+namespace fetouch::fem {
+
+using namespace dealii;
+
+// The last compliance's columns span the answer almost exactly when the state moved little: the
+// Galerkin solution in their span, z = Z C with (Z'K Z) C = Z'H', costs 3m products with K and no
+// solve. Its residual R = H' - K Z C bounds the error of W = H Z C (which is R'K^-1 R, quadratic in
+// R). While R exceeds the Galerkin tolerance, the span grows by the preconditioned residuals P^-1 R (one
+// blocked application of the factorisation, which reduces R as a CG step would) and the Galerkin
+// solution is taken again (a block Krylov iteration preconditioned by the factorisation); a first
+// compliance, or one that does not get there in kMaxGalerkinRounds rounds, solves each column to
+// kComplianceTolerance.
+FullMatrix<double> CondensedCompliance::compute(LinearSystem& system, const std::vector<Vector<double>>& h,
+                                                ComplianceTimes& times) {
+  const unsigned int columns = static_cast<unsigned int>(h.size());
+  const std::size_t n = h.empty() ? 0 : h[0].size();
+  const int factorisations = system.tangent().factorisations();
+  system.times = LinearSystem::Times();
+  std::vector<Vector<double>>& z = z_;
+  bool solve_columns = z.size() != columns;
+  double worst = std::numeric_limits<double>::infinity();
+  // The basis B and K B: the first round replaces the old columns by their Galerkin combination Z
+  // (K Z = H' - R comes for free); each round then adds P^-1 R, at the cost of 3m products with K
+  // and one blocked application of the factorisation.
+  std::vector<Vector<double>> basis = z, kb(basis.size(), Vector<double>(n));
+  for (std::size_t k = 0; k < basis.size(); ++k) system.multiply(basis[k], kb[k]);
+  for (int round = 0; !solve_columns; ++round) {
+    const unsigned int size = static_cast<unsigned int>(basis.size());
+    FullMatrix<double> galerkin(size, size), hb(columns, size);
+    for (unsigned int a = 0; a < size; ++a)
+      for (unsigned int b = 0; b < size; ++b) galerkin(a, b) = basis[a] * kb[b];
+    for (unsigned int a = 0; a < columns; ++a)
+      for (unsigned int b = 0; b < size; ++b) hb(a, b) = h[a] * basis[b];
+    galerkin.gauss_jordan();  // (B'K B)^-1
+    FullMatrix<double> c(size, columns);
+    galerkin.mTmult(c, hb);   // C = (B'K B)^-1 (H B)'
+    std::vector<double> residuals(n * columns);  // column-major, for the blocked solve
+    std::vector<Vector<double>> kz(columns, Vector<double>(n));
+    worst = 0;
+    for (unsigned int k = 0; k < columns; ++k) {
+      z[k] = 0;
+      for (unsigned int j = 0; j < size; ++j) {
+        z[k].add(c(j, k), basis[j]);
+        kz[k].add(c(j, k), kb[j]);
+      }
+      Vector<double> residual = h[k];
+      residual -= kz[k];
+      worst = std::max(worst, residual.l2_norm() / h[k].l2_norm());
+      std::copy(residual.begin(), residual.end(), residuals.begin() + std::size_t(k) * n);
+    }
+    if (worst <= galerkin_tolerance) break;
+    if (!std::isfinite(worst) || round == kMaxGalerkinRounds) {
+      solve_columns = true;
+      break;
+    }
+    std::vector<double> corrections(residuals.size());
+    system.apply_factorisation(residuals.data(), corrections.data(), static_cast<int>(columns));
+    // The span keeps every direction so far (a block Krylov space): the Galerkin solution in it is
+    // the best in the energy norm, as block CG's would be.
+    if (round == 0) basis = z, kb = std::move(kz);
+    for (unsigned int k = 0; k < columns; ++k) {
+      Vector<double> d(n), kd(n);
+      std::copy_n(corrections.begin() + std::size_t(k) * n, n, d.begin());
+      system.constraints().distribute(d);
+      system.multiply(d, kd);
+      basis.push_back(std::move(d));
+      kb.push_back(std::move(kd));
+    }
+  }
+  times.galerkin_residual = std::isfinite(worst) ? worst : 0;
+  if (solve_columns) {
+    const bool warm = z.size() == columns;
+    if (!warm) z.assign(columns, Vector<double>(n));
+    for (unsigned int k = 0; k < columns; ++k) system.solve(h[k], z[k], kComplianceTolerance, /*zero_guess=*/!warm);
+  }
+  times.refined = solve_columns;
+  times.factorisation_s = system.times.factorisation_s;
+  times.solves_s = system.times.solve_s;
+  times.linear_iterations = system.times.linear_iterations;
+  times.factorisations = system.tangent().factorisations() - factorisations;
+  FullMatrix<double> w(columns, columns);
+  for (unsigned int a = 0; a < columns; ++a)
+    for (unsigned int b = 0; b < columns; ++b) w(a, b) = h[a] * z[b];
+  // W is symmetric; the solves leave an asymmetry of the order of their tolerance.
+  for (unsigned int a = 0; a < columns; ++a)
+    for (unsigned int b = 0; b < a; ++b) w(a, b) = w(b, a) = (w(a, b) + w(b, a)) / 2;
+  return w;
+}
+
+}  // namespace fetouch::fem

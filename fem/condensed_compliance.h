@@ -1,0 +1,47 @@
+// The condensed compliance at the contacts: W = H K^-1 H' (3m x 3m, m/N; row/column 3a + c is
+// patch a, component c), K the current tangent with the supports. Its columns Z = K^-1 H' are kept:
+// the next W starts from them (a Galerkin update in their span, no solve, when the state moved
+// little), and a frame that changes only the patch forces predicts its solution as u + Z dF.
+#pragma once
+
+#include <deal.II/lac/full_matrix.h>
+#include <deal.II/lac/vector.h>
+
+#include <vector>
+
+#include "fem/linear_system.h"
+
+namespace fetouch::fem {
+
+struct ComplianceTimes {
+  double assembly_s = 0, factorisation_s = 0, solves_s = 0;
+  int linear_iterations = 0, factorisations = 0;
+  double galerkin_residual = 0;  // of the last columns' Galerkin update (0: none)
+  bool refined = false;          // the columns were solved again
+};
+
+// The relative residual to which compliance columns K^-1 h are solved.
+inline constexpr double kComplianceTolerance = 1e-9;
+// The largest relative residual of a Galerkin-updated column accepted without a new solve, by
+// default: the error of W is then of the order of its square, 1e-6 relative. A scene's accuracy
+// policy may accept more (CondensedCompliance::galerkin_tolerance).
+inline constexpr double kGalerkinTolerance = 1e-3;
+// Rounds of enlarging the span by preconditioned residuals before the columns are solved afresh.
+inline constexpr int kMaxGalerkinRounds = 6;
+
+class CondensedCompliance {
+ public:
+  // W for the rows h (3m of them, constrained entries zero) with the system's current tangent;
+  // fills `times` (but assembly_s) from the system's accumulated times.
+  dealii::FullMatrix<double> compute(LinearSystem& system, const std::vector<dealii::Vector<double>>& h,
+                                     ComplianceTimes& times);
+  // Z = K^-1 H' of the last W (empty before the first, or after clear()).
+  const std::vector<dealii::Vector<double>>& columns() const { return z_; }
+  void clear() { z_.clear(); }
+  double galerkin_tolerance = kGalerkinTolerance;
+
+ private:
+  std::vector<dealii::Vector<double>> z_;
+};
+
+}  // namespace fetouch::fem

@@ -1,0 +1,200 @@
+#include "fem/discretisation.h"
+
+#include <deal.II/base/quadrature_lib.h>
+#include <deal.II/dofs/dof_tools.h>
+#include <deal.II/fe/fe_q.h>
+#include <deal.II/fe/fe_simplex_p.h>
+#include <deal.II/fe/fe_system.h>
+#include <deal.II/fe/fe_values.h>
+#include <deal.II/fe/mapping_fe.h>
+#include <deal.II/fe/mapping_q.h>
+#include <deal.II/grid/grid_tools.h>
+#include <deal.II/lac/dynamic_sparsity_pattern.h>
+#include <deal.II/lac/sparsity_pattern.h>
+#include <deal.II/lac/sparsity_tools.h>
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <numeric>
+#include <stdexcept>
+
+namespace fetouch::fem {
+
+using namespace dealii;
+
+Discretisation::Discretisation(const Triangulation<3>& t, int degree, MPI_Comm c) : tria(t), dof(t), comm(c) {
+  MPI_Comm_rank(comm, &rank);
+  MPI_Comm_size(comm, &ranks);
+  if (degree < 1 || degree > 2) throw std::invalid_argument("element degree must be 1 or 2");
+  simplex = tria.all_reference_cells_are_simplex();
+  if (simplex) {
+    fe = std::make_unique<FESystem<3>>(FE_SimplexP<3>(degree), 3);
+    mapping = std::make_unique<MappingFE<3>>(FE_SimplexP<3>(1));
+    // P1: one point (gradients are constant per cell). P2: the rule of order 3; the four-point
+    // rule, though exact for the linear stiffness of affine cells, let a probe pushed 20 mm into a
+    // soft block fail at 70 % of its load (spurious modes at large strain; tests/fem/test_hard_cases.cc).
+    quadrature = std::make_unique<QGaussSimplex<3>>(degree == 1 ? 1 : 3);
+    face_quadrature = std::make_unique<QGaussSimplex<2>>(degree + 1);
+  } else if (tria.all_reference_cells_are_hyper_cube()) {
+    fe = std::make_unique<FESystem<3>>(FE_Q<3>(degree), 3);
+    mapping = std::make_unique<MappingQ<3>>(1);
+    quadrature = std::make_unique<QGauss<3>>(degree + 1);
+    face_quadrature = std::make_unique<QGauss<2>>(degree + 1);
+  } else {
+    throw std::invalid_argument("mixed tetrahedral and hexahedral meshes are not supported");
+  }
+  dof.distribute_dofs(*fe);
+  partition();
+}
+
+// METIS splits the cells (computed on rank 0, broadcast: every rank must agree); each dof goes to
+// the lowest rank among its cells', and dofs are renumbered rank by rank.
+void Discretisation::partition() {
+  const unsigned int cells = tria.n_active_cells();
+  std::vector<unsigned int> part(cells, 0);
+  if (ranks > 1) {
+    if (rank == 0) {
+      DynamicSparsityPattern connectivity;
+      GridTools::get_face_connectivity_of_cells(tria, connectivity);
+      SparsityPattern graph;
+      graph.copy_from(connectivity);
+      SparsityTools::partition(graph, static_cast<unsigned int>(ranks), part, SparsityTools::Partitioner::metis);
+    }
+    MPI_Bcast(part.data(), static_cast<int>(cells), MPI_UNSIGNED, 0, comm);
+    std::vector<unsigned int> owner(dof.n_dofs(), static_cast<unsigned int>(ranks));
+    std::vector<types::global_dof_index> indices(fe->n_dofs_per_cell());
+    unsigned int k = 0;
+    for (const auto& cell : dof.active_cell_iterators()) {
+      cell->get_dof_indices(indices);
+      for (const auto i : indices) owner[i] = std::min(owner[i], part[k]);
+      ++k;
+    }
+    std::vector<types::global_dof_index> order(dof.n_dofs()), renumber(dof.n_dofs());
+    std::iota(order.begin(), order.end(), 0);
+    std::stable_sort(order.begin(), order.end(), [&](auto a, auto b) { return owner[a] < owner[b]; });
+    for (types::global_dof_index i = 0; i < order.size(); ++i) renumber[order[i]] = i;
+    dof.renumber_dofs(renumber);
+    owned_begin = static_cast<int>(std::count_if(owner.begin(), owner.end(), [&](unsigned int o) { return o < unsigned(rank); }));
+    owned_end = owned_begin + static_cast<int>(std::count(owner.begin(), owner.end(), unsigned(rank)));
+  } else {
+    owned_begin = 0, owned_end = static_cast<int>(dof.n_dofs());
+  }
+  cell_rank = part;
+  my_cells.clear();
+  for (unsigned int k = 0; k < cells; ++k)
+    if (part[k] == unsigned(rank)) my_cells.push_back(k);
+}
+
+void Discretisation::sum_over_ranks(double* data, std::size_t size) const {
+  if (ranks == 1) return;
+  if (rank == 0) MPI_Reduce(MPI_IN_PLACE, data, static_cast<int>(size), MPI_DOUBLE, MPI_SUM, 0, comm);
+  else MPI_Reduce(data, nullptr, static_cast<int>(size), MPI_DOUBLE, MPI_SUM, 0, comm);
+  MPI_Bcast(data, static_cast<int>(size), MPI_DOUBLE, 0, comm);
+}
+
+bool Discretisation::all_ranks(bool ok) const {
+  if (ranks == 1) return ok;
+  int flag = ok ? 1 : 0;
+  MPI_Allreduce(MPI_IN_PLACE, &flag, 1, MPI_INT, MPI_MIN, comm);
+  return flag == 1;
+}
+
+std::vector<int> Discretisation::dof_components() const {
+  std::vector<int> component(dof.n_dofs(), 0);
+  std::vector<types::global_dof_index> indices(fe->n_dofs_per_cell());
+  for (const auto& cell : dof.active_cell_iterators()) {
+    cell->get_dof_indices(indices);
+    for (unsigned int i = 0; i < indices.size(); ++i) component[indices[i]] = fe->system_to_component_index(i).first;
+  }
+  return component;
+}
+
+std::vector<std::vector<double>> Discretisation::rigid_body_modes(const std::vector<bool>& constrained) const {
+  std::map<types::global_dof_index, Point<3>> points;
+  DoFTools::map_dofs_to_support_points(*mapping, dof, points);
+  const std::vector<int> component = dof_components();
+  Point<3> centre;
+  for (const auto& [i, x] : points) centre += x / static_cast<double>(points.size());
+  std::vector<std::vector<double>> modes(6, std::vector<double>(dof.n_dofs(), 0.0));
+  for (const auto& [i, x] : points) {
+    if (constrained[i]) continue;
+    const int c = component[i];
+    const Tensor<1, 3> r = x - centre;
+    modes[c][i] = 1;
+    for (int a = 0; a < 3; ++a) {  // rotation about axis a: (e_a x r)_c
+      Tensor<1, 3> axis;
+      axis[a] = 1;
+      modes[3 + a][i] = cross_product_3d(axis, r)[c];
+    }
+  }
+  for (std::size_t a = 0; a < modes.size(); ++a) {  // Gram-Schmidt, twice for round-off
+    for (int pass = 0; pass < 2; ++pass)
+      for (std::size_t b = 0; b < a; ++b) {
+        const double d = std::inner_product(modes[a].begin(), modes[a].end(), modes[b].begin(), 0.0);
+        for (std::size_t i = 0; i < modes[a].size(); ++i) modes[a][i] -= d * modes[b][i];
+      }
+    const double norm = std::sqrt(std::inner_product(modes[a].begin(), modes[a].end(), modes[a].begin(), 0.0));
+    for (double& v : modes[a]) v /= norm;
+  }
+  return modes;
+}
+
+const Discretisation::Cells& Discretisation::cells() const {
+  if (cells_built_) return cells_;
+  Cells& c = cells_;
+  c.n = fe->n_dofs_per_cell();
+  c.nq = quadrature->size();
+  c.nbase = fe->base_element(0).n_dofs_per_cell();
+  c.component.resize(c.n);
+  c.base.resize(c.n);
+  for (unsigned int i = 0; i < c.n; ++i) {
+    c.component[i] = fe->system_to_component_index(i).first;
+    c.base[i] = fe->system_to_component_index(i).second;
+  }
+  const unsigned int cells = tria.n_active_cells();
+  c.indices.resize(std::size_t(cells) * c.n);
+  c.jxw.resize(std::size_t(cells) * c.nq);
+  c.gradients.resize(std::size_t(cells) * c.nq * c.nbase);
+  c.shape_values.resize(std::size_t(c.nq) * c.nbase);
+  c.material_id.resize(cells);
+  for (unsigned int q = 0; q < c.nq; ++q)
+    for (unsigned int b = 0; b < c.nbase; ++b)
+      c.shape_values[q * c.nbase + b] = fe->base_element(0).shape_value(b, quadrature->point(q));
+  FEValues<3> values(*mapping, *fe, *quadrature, update_gradients | update_JxW_values);
+  std::vector<types::global_dof_index> local(c.n);
+  unsigned int k = 0;
+  for (const auto& cell : dof.active_cell_iterators()) {
+    values.reinit(cell);
+    cell->get_dof_indices(local);
+    c.material_id[k] = cell->material_id();
+    std::copy(local.begin(), local.end(), c.indices.begin() + std::size_t(k) * c.n);
+    for (unsigned int q = 0; q < c.nq; ++q) {
+      c.jxw[std::size_t(k) * c.nq + q] = values.JxW(q);
+      for (unsigned int b = 0; b < c.nbase; ++b)
+        c.gradients[(std::size_t(k) * c.nq + q) * c.nbase + b] =
+            values.shape_grad_component(fe->component_to_system_index(0, b), q, 0);
+    }
+    ++k;
+  }
+  cells_built_ = true;
+  return c;
+}
+
+void Discretisation::gather(unsigned int k, const Vector<double>& global, double* local) const {
+  const Cells& c = cells();
+  const types::global_dof_index* indices = &c.indices[std::size_t(k) * c.n];
+  for (unsigned int i = 0; i < c.n; ++i) local[i] = global[indices[i]];
+}
+
+Tensor2 Discretisation::deformation_gradient(unsigned int k, unsigned int q, const double* u_local) const {
+  const Cells& c = cells();
+  const Tensor<1, 3>* grad = &c.gradients[(std::size_t(k) * c.nq + q) * c.nbase];
+  Tensor2 F;
+  for (unsigned int i = 0; i < c.n; ++i)
+    for (int J = 0; J < 3; ++J) F[c.component[i]][J] += u_local[i] * grad[c.base[i]][J];
+  for (int d = 0; d < 3; ++d) F[d][d] += 1;
+  return F;
+}
+
+}  // namespace fetouch::fem

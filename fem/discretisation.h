@@ -1,0 +1,83 @@
+// The discretisation of a body: its mesh, the vector-valued finite element (P1/P2 on tetrahedra,
+// Q1/Q2 on hexahedra), the degrees of freedom, their split among MPI ranks, and what a total
+// Lagrangian assembly needs of every cell and never recomputes: dof indices, JxW and the reference
+// gradients of the scalar base functions at each quadrature point.
+//
+// MPI: every rank holds the whole mesh and state; METIS splits the cells (each rank assembles its
+// own) and the dofs are renumbered rank by rank so that each rank owns a contiguous block of rows.
+#pragma once
+
+#include <deal.II/base/quadrature.h>
+#include <deal.II/base/tensor.h>
+#include <deal.II/dofs/dof_handler.h>
+#include <deal.II/fe/fe.h>
+#include <deal.II/fe/mapping.h>
+#include <deal.II/grid/tria.h>
+#include <deal.II/lac/vector.h>
+#include <mpi.h>
+
+#include <memory>
+#include <vector>
+
+#include "fem/material.h"
+
+namespace fetouch::fem {
+
+class Discretisation {
+ public:
+  // Throws std::invalid_argument for a degree other than 1 or 2, or a mixed mesh.
+  Discretisation(const dealii::Triangulation<3>& triangulation, int degree, MPI_Comm comm);
+
+  const dealii::Triangulation<3>& tria;
+  bool simplex = true;
+  std::unique_ptr<dealii::FiniteElement<3>> fe;
+  std::unique_ptr<dealii::Mapping<3>> mapping;
+  std::unique_ptr<dealii::Quadrature<3>> quadrature;
+  std::unique_ptr<dealii::Quadrature<2>> face_quadrature;
+  dealii::DoFHandler<3> dof;
+
+  MPI_Comm comm;
+  int rank = 0, ranks = 1;
+  std::vector<unsigned int> my_cells;   // indices (in cell order) of the cells this rank assembles
+  std::vector<unsigned int> cell_rank;  // the rank of every cell
+  int owned_begin = 0, owned_end = 0;   // this rank's rows
+
+  unsigned int n_dofs() const { return static_cast<unsigned int>(dof.n_dofs()); }
+  unsigned int n_cells() const { return tria.n_active_cells(); }
+
+  // Sums a vector's per-rank parts onto every rank, bitwise the same everywhere (reduced on rank 0,
+  // then broadcast: a rank that rounded differently would take other Newton decisions).
+  void sum_over_ranks(double* data, std::size_t size) const;
+  // True on every rank iff `ok` on every rank.
+  bool all_ranks(bool ok) const;
+
+  // The displacement component of every dof.
+  std::vector<int> dof_components() const;
+  // The rigid-body modes (3 translations, 3 rotations about the centroid), orthonormal, zero on
+  // constrained dofs: algebraic multigrid's near-null space.
+  std::vector<std::vector<double>> rigid_body_modes(const std::vector<bool>& constrained) const;
+
+  // The per-cell data of a total Lagrangian assembly (built on first use; cell order).
+  struct Cells {
+    unsigned int n = 0, nq = 0, nbase = 0;       // dofs per cell, quadrature points, scalar base functions
+    std::vector<unsigned int> component, base;   // of each cell dof
+    std::vector<dealii::types::global_dof_index> indices;  // [cell][i]
+    std::vector<double> jxw;                     // [cell][q]
+    std::vector<dealii::Tensor<1, 3>> gradients;  // [cell][q][base], reference
+    std::vector<double> shape_values;            // [q][base], the same on every cell
+    std::vector<dealii::types::material_id> material_id;  // [cell]
+  };
+  const Cells& cells() const;
+
+  // Cell k's entries of a global vector.
+  void gather(unsigned int k, const dealii::Vector<double>& global, double* local) const;
+  // F = I + grad u at quadrature point q of cell k, from the cell's local displacements.
+  Tensor2 deformation_gradient(unsigned int k, unsigned int q, const double* u_local) const;
+
+ private:
+  void partition();
+  mutable Cells cells_;
+  mutable bool cells_built_ = false;
+};
+
+}  // namespace fetouch::fem

@@ -1,0 +1,139 @@
+#include "fem/linear_system.h"
+
+#include <deal.II/base/function.h>
+#include <deal.II/dofs/dof_tools.h>
+#include <deal.II/fe/component_mask.h>
+#include <deal.II/lac/dynamic_sparsity_pattern.h>
+#include <deal.II/numerics/vector_tools.h>
+
+#include <algorithm>
+#include <map>
+#include <set>
+#include <stdexcept>
+#include <string>
+
+namespace fetouch::fem {
+
+using namespace dealii;
+
+namespace {
+
+// g(x) scaled, as a deal.II Function.
+class ScaledField : public Function<3> {
+ public:
+  ScaledField(const Field& field, double scale) : Function<3>(3), field_(field), scale_(scale) {}
+  double value(const Point<3>& p, const unsigned int component) const override { return scale_ * field_(p)[component]; }
+
+ private:
+  const Field& field_;
+  double scale_;
+};
+
+ComponentMask mask(const std::array<bool, 3>& components) { return ComponentMask({components[0], components[1], components[2]}); }
+
+}  // namespace
+
+LinearSystem::LinearSystem(const Discretisation& discretisation, MPI_Comm comm) : d_(discretisation), tangent_(comm) {}
+
+void LinearSystem::set_up(const std::vector<Support>& supports, TangentSystem::Method method) {
+  constraints_.clear();
+  std::set<types::boundary_id> present;
+  for (const auto& face : d_.tria.active_face_iterators())
+    if (face->at_boundary()) present.insert(face->boundary_id());
+  for (const Support& s : supports)
+    if (!present.count(s.boundary))
+      throw std::invalid_argument("prescribed displacement: no boundary face has id " + std::to_string(s.boundary));
+  for (const Support& s : supports)
+    VectorTools::interpolate_boundary_values(*d_.mapping, d_.dof, s.boundary, Functions::ZeroFunction<3>(3), constraints_,
+                                             mask(s.components));
+  constraints_.close();
+  const types::global_dof_index n = d_.dof.n_dofs();
+  constrained_.assign(n, false);
+  for (types::global_dof_index i = 0; i < n; ++i) constrained_[i] = constraints_.is_constrained(i);
+  // Couplings of free dofs, and the diagonal of constrained ones.
+  DynamicSparsityPattern dsp(n);
+  DoFTools::make_sparsity_pattern(d_.dof, dsp);
+  std::vector<int> row_start{0}, columns;
+  for (types::global_dof_index i = 0; i < n; ++i) {
+    for (auto entry = dsp.begin(i); entry != dsp.end(i); ++entry) {
+      const types::global_dof_index j = entry->column();
+      if (i == j || (!constrained_[i] && !constrained_[j])) columns.push_back(static_cast<int>(j));
+    }
+    row_start.push_back(static_cast<int>(columns.size()));
+  }
+  const bool amg = method == TangentSystem::Method::amg;
+  tangent_.set_pattern(std::move(row_start), std::move(columns), method, d_.owned_begin, d_.owned_end,
+                       amg ? d_.rigid_body_modes(constrained_) : std::vector<std::vector<double>>{});
+  y_current_ = false;
+  scatter_.clear();
+}
+
+const int* LinearSystem::cell_scatter(unsigned int k) const {
+  const Discretisation::Cells& c = d_.cells();
+  const unsigned int n = c.n;
+  if (scatter_.empty()) {  // built once per set of supports
+    auto& scatter = const_cast<std::vector<int>&>(scatter_);
+    const unsigned int cells = d_.n_cells();
+    scatter.resize(std::size_t(cells) * n * n);
+    for (unsigned int cell = 0; cell < cells; ++cell) {
+      const types::global_dof_index* indices = &c.indices[std::size_t(cell) * n];
+      int* out = &scatter[std::size_t(cell) * n * n];
+      for (unsigned int i = 0; i < n; ++i)
+        for (unsigned int j = 0; j < n; ++j)
+          out[i * n + j] = constrained_[indices[i]] || constrained_[indices[j]]
+                               ? -1
+                               : tangent_.position(static_cast<int>(indices[i]), static_cast<int>(indices[j]));
+    }
+  }
+  return &scatter_[std::size_t(k) * n * n];
+}
+
+void LinearSystem::apply_supports(const std::vector<Support>& supports, double factor, Vector<double>& u) const {
+  for (const Support& s : supports) {
+    std::map<types::global_dof_index, double> values;
+    VectorTools::interpolate_boundary_values(*d_.mapping, d_.dof, s.boundary, ScaledField(s.field, factor), values,
+                                             mask(s.components));
+    for (const auto& [index, value] : values) u[index] = value;
+  }
+}
+
+void LinearSystem::set_rank_one(double c, const Vector<double>* g) {
+  rank_one_c_ = g ? c : 0;
+  rank_one_g_ = g;
+  y_current_ = false;
+}
+
+void LinearSystem::account(const TangentSystem::SolveStats& stats) {
+  times.factorisation_s += stats.factor_s;
+  times.solve_s += stats.solve_s;
+  times.linear_iterations += stats.iterations;
+}
+
+void LinearSystem::solve(const Vector<double>& rhs, Vector<double>& x, double tolerance, bool zero_guess) {
+  x.reinit(rhs.size(), /*omit_zeroing_entries=*/!zero_guess);
+  account(tangent_.solve(rhs.begin(), x.begin(), tolerance, zero_guess));
+  if (rank_one_c_ != 0) {
+    // Sherman-Morrison: (K_s + c g g')^-1 b = x - c (g.x) / (1 + c g.y) y, x = K_s^-1 b, y = K_s^-1 g.
+    const Vector<double>& g = *rank_one_g_;
+    if (!y_current_) {
+      y_.reinit(g.size(), /*omit_zeroing_entries=*/y_.size() == g.size());
+      account(tangent_.solve(g.begin(), y_.begin(), std::min(tolerance, 1e-10), /*zero_guess=*/false));
+      y_current_ = true;
+    }
+    x.add(-rank_one_c_ * (g * x) / (1 + rank_one_c_ * (g * y_)), y_);
+  }
+  constraints_.distribute(x);
+}
+
+void LinearSystem::multiply(const Vector<double>& x, Vector<double>& y) const {
+  tangent_.multiply(x.begin(), y.begin());
+  if (rank_one_c_ != 0) y.add(rank_one_c_ * (*rank_one_g_ * x), *rank_one_g_);
+}
+
+void LinearSystem::apply_factorisation(const double* b, double* x, int columns) {
+  TangentSystem::SolveStats stats = tangent_.apply_factorisation(b, x, columns);
+  stats.iterations = 1;  // one blocked application
+  account(stats);
+}
+
+}  // namespace fetouch::fem

@@ -1,0 +1,86 @@
+// The linear systems of a solve: the supports (prescribed displacements per component on boundary
+// regions) as constraints, the tangent's sparsity (free-free couplings and the diagonal of
+// constrained dofs), the sparse tangent (tangent_system.h: CG on a stale factorisation, or AMG) plus
+// an optional dense rank-one part c g g' (a fluid cavity's), and the time each phase took.
+#pragma once
+
+#include <deal.II/base/point.h>
+#include <deal.II/base/tensor.h>
+#include <deal.II/lac/affine_constraints.h>
+#include <deal.II/lac/vector.h>
+
+#include <array>
+#include <functional>
+#include <vector>
+
+#include "fem/discretisation.h"
+#include "fem/tangent_system.h"
+
+namespace fetouch::fem {
+
+using Field = std::function<dealii::Tensor<1, 3>(const dealii::Point<3>&)>;
+
+// u = lambda g(x) on the selected components of a boundary region.
+struct Support {
+  unsigned int boundary;
+  std::array<bool, 3> components;
+  Field field;
+};
+
+class LinearSystem {
+ public:
+  LinearSystem(const Discretisation& discretisation, MPI_Comm comm);
+
+  // Constraints and sparsity for these supports (throws std::invalid_argument for a boundary id no
+  // face has); the tangent's values are then stale.
+  void set_up(const std::vector<Support>& supports, TangentSystem::Method method);
+  // u := factor g(x) on the supports' components.
+  void apply_supports(const std::vector<Support>& supports, double factor, dealii::Vector<double>& u) const;
+
+  const dealii::AffineConstraints<double>& constraints() const { return constraints_; }
+  const std::vector<bool>& constrained() const { return constrained_; }
+  TangentSystem& tangent() { return tangent_; }
+  const TangentSystem& tangent() const { return tangent_; }
+  int position(int row, int column) const { return tangent_.position(row, column); }
+  // Where each cell matrix entry (i, j) of cell k goes in the tangent's value array, at
+  // [k n^2 + i n + j]; -1 where the row or the column is constrained.
+  const int* cell_scatter(unsigned int k) const;
+
+  // The rank-one part (c = 0: none); g must outlive the next solves.
+  void set_rank_one(double c, const dealii::Vector<double>* g);
+  double rank_one_c() const { return rank_one_c_; }
+  const dealii::Vector<double>* rank_one_g() const { return rank_one_g_; }
+  // y = K_s^-1 g of the current tangent (solved on first use after a tangent assembly).
+  const dealii::Vector<double>& rank_one_solution() const { return y_; }
+
+  // x = K^-1 rhs to a relative residual `tolerance` (x holds the initial guess unless zero_guess),
+  // constraints distributed.
+  void solve(const dealii::Vector<double>& rhs, dealii::Vector<double>& x, double tolerance, bool zero_guess);
+  // y = K x.
+  void multiply(const dealii::Vector<double>& x, dealii::Vector<double>& y) const;
+  // X = P^-1 B, `columns` right-hand sides (column-major), P the factorisation.
+  void apply_factorisation(const double* b, double* x, int columns);
+
+  // The tangent was assembled anew (drops y).
+  void tangent_changed() { y_current_ = false; }
+
+  struct Times {
+    double factorisation_s = 0, solve_s = 0;
+    int linear_iterations = 0;
+  };
+  Times times;  // accumulated; the caller resets it
+
+ private:
+  void account(const TangentSystem::SolveStats& stats);
+  const Discretisation& d_;
+  dealii::AffineConstraints<double> constraints_;
+  std::vector<bool> constrained_;
+  std::vector<int> scatter_;
+  TangentSystem tangent_;
+  double rank_one_c_ = 0;
+  const dealii::Vector<double>* rank_one_g_ = nullptr;
+  dealii::Vector<double> y_;
+  bool y_current_ = false;
+};
+
+}  // namespace fetouch::fem

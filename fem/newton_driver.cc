@@ -1,0 +1,225 @@
+#include "fem/newton_driver.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+
+namespace fetouch::fem {
+
+using namespace dealii;
+
+namespace {
+
+double since(std::chrono::steady_clock::time_point start) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+}  // namespace
+
+NewtonDriver::NewtonDriver(const Discretisation& d, LinearSystem& system, const std::vector<Support>& supports,
+                           Vector<double>& u)
+    : d_(d), system_(system), supports_(supports), u_(u) {}
+
+bool NewtonDriver::assemble(double lambda, Vector<double>& r, bool tangent, Vector<double>* internal) {
+  const auto start = std::chrono::steady_clock::now();
+  TangentSystem& k = system_.tangent();
+  r = 0;
+  if (internal) *internal = 0;
+  if (tangent) {
+    k.zero();
+    tangent_current_ = false;
+  }
+  const AssemblyState state{u_, static_factor(lambda), lambda};
+  AssemblyTarget target{r.begin(), internal ? internal->begin() : nullptr, tangent ? k.values() : nullptr, &system_};
+  // This rank's cells first, summed over the ranks (every rank must take the same decision, then hold
+  // the same sums); then the terms evaluated whole on every rank.
+  term_seconds.resize(terms_.size(), 0.0);
+  const auto timed = [&](std::size_t i) {
+    const auto term_start = std::chrono::steady_clock::now();
+    const bool ok = terms_[i]->assemble(state, target);
+    term_seconds[i] += since(term_start);
+    return ok;
+  };
+  bool ok = true;
+  for (std::size_t i = 0; i < terms_.size(); ++i)
+    if (terms_[i]->distributed() && ok) ok = timed(i);
+  if (!d_.all_ranks(ok)) return assembly_s += since(start), false;
+  d_.sum_over_ranks(r.begin(), r.size());
+  if (internal) d_.sum_over_ranks(internal->begin(), internal->size());
+  if (tangent) d_.sum_over_ranks(k.values(), k.nonzeros());
+  for (std::size_t i = 0; i < terms_.size(); ++i)
+    if (!terms_[i]->distributed() && !timed(i)) return assembly_s += since(start), false;
+  if (tangent) {
+    tangent_assembled_ = true;
+    k.finish(system_.constrained());
+    system_.tangent_changed();
+    system_.set_rank_one(0, nullptr);
+    for (const Term* term : terms_) {
+      double c = 0;
+      const Vector<double>* g = nullptr;
+      if (term->rank_one(c, g)) {
+        system_.set_rank_one(c, g);
+        break;
+      }
+    }
+    tangent_current_ = true;
+  }
+  system_.constraints().set_zero(r);
+  assembly_s += since(start);
+  return true;
+}
+
+std::vector<double> NewtonDriver::unknowns() const {
+  std::vector<double> values;
+  for (const Term* term : terms_) values.push_back(term->unknown());
+  return values;
+}
+
+void NewtonDriver::set_unknowns(const std::vector<double>& values) {
+  for (std::size_t i = 0; i < terms_.size(); ++i) terms_[i]->set_unknown(values[i]);
+}
+
+// `reference`: the residual norm the tolerance is relative to; negative: the first iteration's.
+// `frame`: the solve continues from a converged one, so the accuracy policy and the frame's work
+// bound apply.
+StepReport NewtonDriver::newton(double lambda, const NewtonSettings& s, double reference,
+                                const HandoverError& handover_error, bool frame) {
+  StepReport report;
+  report.load_factor = lambda;
+  system_.apply_supports(supports_, static_factor(lambda), u_);
+  Vector<double> r(d_.n_dofs()), du, trial_r(d_.n_dofs());
+  bool assembled = false;  // r and the tangent are already those of the current u
+  for (int it = 0; it <= s.max_iterations; ++it) {
+    // A frame's first correction solves with the previous frame's tangent, still in the matrix
+    // (a frame moves the state little): the first assembly is the residual's alone. The trial step
+    // is assembled with its tangent, as is every later iteration.
+    const bool keep_tangent = frame && it == 0 && tangent_assembled_;
+    if (!assembled && !assemble(lambda, r, /*tangent=*/!keep_tangent)) {
+      report.failure = "an element inverted (J <= 0)";
+      return report;
+    }
+    assembled = false;
+    const double norm = r.l2_norm();
+    report.residuals.push_back(norm);
+    if (!std::isfinite(norm)) {
+      report.failure = "the residual is not finite";
+      return report;
+    }
+    if (reference < 0) reference = norm;
+    const bool satisfied = std::all_of(terms_.begin(), terms_.end(), [](const Term* t) { return t->satisfied(); });
+    const bool tight = norm <= s.relative_tolerance * reference || norm <= s.absolute_tolerance;
+    // The accuracy policy: the errors the haptic loop would see, in its units (the caller's estimate
+    // of the handed-over points' displacement error, and the largest out-of-balance nodal force).
+    const bool policy = frame && s.position_tolerance_m > 0 && s.force_tolerance_n > 0;
+    const bool accurate = policy && r.linfty_norm() <= s.force_tolerance_n && handover_error(r) <= s.position_tolerance_m;
+    // The frame's work bound: once the residual is down a hundredfold, the remainder goes to the
+    // next frame (a state far from equilibrium, whose tangent may be indefinite, is never handed on).
+    const bool bounded =
+        frame && s.frame_iterations > 0 && it >= s.frame_iterations && norm < 1e-2 * report.residuals.front();
+    if (satisfied && (tight || accurate || bounded)) {
+      report.converged = true;
+      report.accurate = !tight && accurate;
+      report.carried = !tight && !accurate;
+      report.iterations = it;
+      return report;
+    }
+    if (it == s.max_iterations) break;
+    // Inexact Newton: far from the solution 1e-3; once the residual has dropped a hundredfold (the
+    // quadratic regime), aim the step straight at the convergence tolerance.
+    const double eta = norm < 5e-2 * reference ? 0.5 * s.relative_tolerance * reference / norm : 1e-3;
+    system_.solve(r, du, std::clamp(eta, 1e-12, 1e-3), /*zero_guess=*/true);
+    for (Term* term : terms_) term->complete_step(system_, du);
+    // Backtracking: halve until the residual decreases and no term rejects the state. The full step
+    // is assembled with its tangent, which the next iteration then reuses (one assembly per Newton
+    // iteration when the full step is taken, as it is near convergence). Without the line search the
+    // full step is taken whatever its residual.
+    const Vector<double> start = u_;
+    const std::vector<double> start_unknowns = unknowns();
+    double alpha = 1;
+    bool accepted = false;
+    const int tries = s.line_search ? 10 : 1;
+    for (int b = 0; b < tries && !accepted; ++b, alpha /= 2) {
+      u_ = start;
+      u_.add(alpha, du);
+      for (Term* term : terms_) term->take_step(alpha);
+      const bool full = b == 0;
+      if (!assemble(lambda, trial_r, /*tangent=*/full)) continue;
+      accepted = !s.line_search || trial_r.l2_norm() < (1 - 1e-4 * alpha) * norm || b == tries - 1;
+      if (accepted && full) {
+        r.swap(trial_r);
+        assembled = true;
+      }
+    }
+    if (!accepted) {
+      u_ = start;
+      set_unknowns(start_unknowns);
+      report.failure = s.line_search ? "the line search found no admissible step" : "the Newton step inverted an element";
+      return report;
+    }
+  }
+  report.iterations = s.max_iterations;
+  report.failure = "no convergence in " + std::to_string(s.max_iterations) + " Newton iterations";
+  return report;
+}
+
+SolveReport NewtonDriver::solve(const NewtonSettings& s, const Predictor& predictor, const HandoverError& handover_error) {
+  term_seconds.assign(terms_.size(), 0.0);
+  // A haptic frame: a solve that continues from a converged one, with a hand-over error estimate.
+  const bool frame = loaded() && static_cast<bool>(handover_error);
+  const Vector<double> initial = u_;
+  const std::vector<double> initial_unknowns = unknowns();
+  for (Term* term : terms_) term->begin_solve(initial);
+  assembly_s = 0;
+  system_.times = LinearSystem::Times();
+  TangentSystem& tangent = system_.tangent();
+  const int factorisations = tangent.factorisations();
+  SolveReport report;
+  const auto times = [&] {
+    report.assembly_s = assembly_s, report.factorisation_s = system_.times.factorisation_s;
+    report.solve_s = system_.times.solve_s;
+    report.linear_iterations = system_.times.linear_iterations;
+    report.factorisations = tangent.factorisations() - factorisations;
+  };
+  double done = 0, increment = 1.0 / std::max(1, s.load_steps);
+  bool predict = static_cast<bool>(predictor);
+  while (done < 1 - 1e-12) {
+    const double target = std::min(1.0, done + increment);
+    const Vector<double> last_good = u_;
+    const std::vector<double> last_good_unknowns = unknowns();
+    const double reference = predict ? predictor(u_) : -1;
+    StepReport step = newton(target, s, reference, handover_error, frame && s.load_steps <= 1);
+    report.carried = report.carried || step.carried;
+    report.total_iterations += static_cast<int>(step.residuals.size()) - 1;
+    const bool ok = step.converged;
+    report.steps.push_back(step);
+    if (ok) {
+      done = target;
+      predict = false;
+      continue;
+    }
+    u_ = last_good;  // roll back the step
+    set_unknowns(last_good_unknowns);
+    tangent_current_ = false;
+    if (predict) {  // retry the same step from the last converged state
+      predict = false;
+      continue;
+    }
+    tangent.refactor_next();  // the retry starts from a state the factorisation may not fit
+    if (++report.cuts > s.max_cuts) {
+      u_ = initial;  // and the whole solve: the state stays the last converged one
+      set_unknowns(initial_unknowns);
+      report.failure = "load step at factor " + std::to_string(target) + " failed after " + std::to_string(s.max_cuts) +
+                       " cuts: " + step.failure;
+      times();
+      return report;
+    }
+    increment /= 2;
+  }
+  report.converged = true;
+  times();
+  static_done_ = 1;
+  for (Term* term : terms_) term->accept(u_);
+  return report;
+}
+
+}  // namespace fetouch::fem

@@ -1,0 +1,155 @@
+// Post-processing and output of a QuasiStaticSolver's state: per-cell fields (J, von Mises stress),
+// point values and error norms against exact solutions, and the deformed body as VTU (or per-rank
+// pieces gathered by a PVTU) for ParaView.
+#include <deal.II/base/function.h>
+#include <deal.II/base/quadrature_lib.h>
+#include <deal.II/dofs/dof_tools.h>
+#include <deal.II/numerics/data_component_interpretation.h>
+#include <deal.II/numerics/data_out.h>
+#include <deal.II/numerics/vector_tools.h>
+
+#include <cmath>
+#include <fstream>
+#include <map>
+#include <stdexcept>
+
+#include "fem/quasi_static_solver.h"
+#include "fem/solver_parts.h"
+
+namespace fetouch::fem {
+
+using namespace dealii;
+
+namespace {
+
+class FieldFunction : public Function<3> {
+ public:
+  explicit FieldFunction(const Field& field) : Function<3>(3), field_(field) {}
+  double value(const Point<3>& p, const unsigned int component) const override { return field_(p)[component]; }
+
+ private:
+  const Field& field_;
+};
+
+// The deformed state as DataOut patches: displacement (dof data), J and von Mises stress (cell data),
+// optionally on the cells of one rank only.
+struct Output {
+  DataOut<3> out;
+  Vector<double> jacobian, von_mises;
+};
+
+void fill_output(const QuasiStaticSolver::Impl& m, const QuasiStaticSolver::CellFields& fields, Output& o,
+                 bool own_cells_only) {
+  o.out.attach_dof_handler(m.d.dof);
+  const std::vector<std::string> names(3, "displacement");
+  const std::vector<DataComponentInterpretation::DataComponentInterpretation> kinds(
+      3, DataComponentInterpretation::component_is_part_of_vector);
+  o.out.add_data_vector(m.u, names, DataOut<3>::type_dof_data, kinds);
+  o.jacobian = Vector<double>(fields.jacobian.begin(), fields.jacobian.end());
+  o.von_mises = Vector<double>(fields.von_mises.begin(), fields.von_mises.end());
+  o.out.add_data_vector(o.jacobian, "J", DataOut<3>::type_cell_data);
+  o.out.add_data_vector(o.von_mises, "von_mises_stress_pa", DataOut<3>::type_cell_data);
+  if (own_cells_only)
+    o.out.set_cell_selection([&m](const typename Triangulation<3>::cell_iterator& cell) {
+      return cell->is_active() && m.d.cell_rank[cell->active_cell_index()] == static_cast<unsigned int>(m.d.rank);
+    });
+  o.out.build_patches(*m.d.mapping, m.d.fe->degree);
+}
+
+}  // namespace
+
+QuasiStaticSolver::CellFields QuasiStaticSolver::cell_fields() const {
+  const Impl& m = *impl_;
+  const Discretisation::Cells& c = m.d.cells();
+  const unsigned int cells = m.d.n_cells(), nq = c.nq;
+  CellFields fields;
+  fields.jacobian.reserve(cells);
+  fields.von_mises.reserve(cells);
+  std::vector<double> u_local(c.n);
+  for (unsigned int k = 0; k < cells; ++k) {
+    m.d.gather(k, m.u, u_local.data());
+    double j_sum = 0, vm_sum = 0;
+    for (unsigned int q = 0; q < nq; ++q) {
+      const Tensor2 F = m.d.deformation_gradient(k, q, u_local.data());
+      const double j = determinant(F);
+      j_sum += j;
+      Tensor2 P;
+      if (j > 0 && m.elasticity.material_of(k).evaluate(F, P, nullptr)) {
+        const Tensor<2, 3> sigma = P * transpose(F) / j;  // Cauchy
+        const Tensor<2, 3> dev = sigma - trace(sigma) / 3 * unit_symmetric_tensor<3>();
+        vm_sum += std::sqrt(1.5 * scalar_product(dev, dev));
+      }
+    }
+    fields.jacobian.push_back(j_sum / nq);
+    fields.von_mises.push_back(vm_sum / nq);
+  }
+  return fields;
+}
+
+double QuasiStaticSolver::max_displacement() const {
+  const Impl& m = *impl_;
+  std::vector<types::global_dof_index> indices(m.d.fe->n_dofs_per_cell());
+  double worst = 0;
+  for (const auto& cell : m.d.dof.active_cell_iterators()) {
+    cell->get_dof_indices(indices);
+    for (unsigned int node = 0; node < m.d.fe->base_element(0).n_dofs_per_cell(); ++node) {
+      Tensor<1, 3> u;
+      for (unsigned int c = 0; c < 3; ++c) u[c] = m.u[indices[m.d.fe->component_to_system_index(c, node)]];
+      worst = std::max(worst, u.norm());
+    }
+  }
+  return worst;
+}
+
+Tensor<1, 3> QuasiStaticSolver::displacement_at(const Point<3>& point) const {
+  Vector<double> value(3);
+  VectorTools::point_value(*impl_->d.mapping, impl_->d.dof, impl_->u, point, value);
+  Tensor<1, 3> t;
+  for (int c = 0; c < 3; ++c) t[c] = value[c];
+  return t;
+}
+
+double QuasiStaticSolver::max_nodal_error(const std::function<Tensor<1, 3>(const Point<3>&)>& exact) const {
+  std::map<types::global_dof_index, Point<3>> points;
+  DoFTools::map_dofs_to_support_points(*impl_->d.mapping, impl_->d.dof, points);
+  double worst = 0;
+  const std::vector<int> component = impl_->d.dof_components();
+  for (const auto& [index, point] : points) worst = std::max(worst, std::abs(impl_->u[index] - exact(point)[component[index]]));
+  return worst;
+}
+
+double QuasiStaticSolver::l2_error(const std::function<Tensor<1, 3>(const Point<3>&)>& exact) const {
+  const Impl& m = *impl_;
+  const FieldFunction field(exact);
+  Vector<float> per_cell(m.d.n_cells());
+  const unsigned int order = m.d.fe->degree + 2;  // Gauss quadrature two orders above the element's
+  std::unique_ptr<Quadrature<3>> q;
+  if (m.d.simplex)
+    q = std::make_unique<QGaussSimplex<3>>(order);
+  else
+    q = std::make_unique<QGauss<3>>(order);
+  VectorTools::integrate_difference(*m.d.mapping, m.d.dof, m.u, field, per_cell, *q, VectorTools::L2_norm);
+  return VectorTools::compute_global_error(m.d.tria, per_cell, VectorTools::L2_norm);
+}
+
+void QuasiStaticSolver::write_vtu(const std::string& path) const {
+  Output o;
+  fill_output(*impl_, cell_fields(), o, false);
+  std::ofstream file(path);
+  if (!file) throw std::runtime_error("cannot write " + path);
+  o.out.write_vtu(file);
+  if (!file) throw std::runtime_error("cannot write " + path);
+}
+
+std::string QuasiStaticSolver::write_vtu_pieces(const std::string& directory, const std::string& name,
+                                                unsigned int counter) const {
+  Output o;
+  fill_output(*impl_, cell_fields(), o, true);
+  try {
+    return o.out.write_vtu_with_pvtu_record(directory + "/", name, counter, impl_->d.comm, 4);
+  } catch (const std::exception&) {
+    throw std::runtime_error("cannot write " + directory + "/" + name + " (parallel VTU pieces)");
+  }
+}
+
+}  // namespace fetouch::fem
