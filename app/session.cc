@@ -214,6 +214,38 @@ void advance(timespec& t, long nanoseconds) {
 
 constexpr long kSpinNs = 100'000;  // the haptic thread spins the last 100 us before each deadline
 
+// The cores the session's threads run on: the haptic thread alone on the last one, the rest for
+// the solver (its assembly threads and factorisation worker follow it) and the I/O thread. None
+// with fewer than 2 cores, or when the process may not use them all.
+struct CoreSplit {
+  int haptic = -1;
+  cpu_set_t others{};
+  static CoreSplit make(bool wanted) {
+    CoreSplit split;
+    cpu_set_t allowed;
+    CPU_ZERO(&allowed);
+    if (!wanted || sched_getaffinity(0, sizeof allowed, &allowed) != 0 || CPU_COUNT(&allowed) < 2) return split;
+    for (int c = CPU_SETSIZE - 1; c >= 0; --c)
+      if (CPU_ISSET(c, &allowed)) {
+        split.haptic = c;
+        break;
+      }
+    split.others = allowed;
+    CPU_CLR(split.haptic, &split.others);
+    return split;
+  }
+  bool pin_haptic() const {
+    if (haptic < 0) return false;
+    cpu_set_t one;
+    CPU_ZERO(&one);
+    CPU_SET(haptic, &one);
+    return pthread_setaffinity_np(pthread_self(), sizeof one, &one) == 0;
+  }
+  void pin_other() const {
+    if (haptic >= 0) pthread_setaffinity_np(pthread_self(), sizeof others, &others);
+  }
+};
+
 }  // namespace
 
 SessionSummary run_realtime(haptics::Environment& environment, std::vector<std::unique_ptr<haptics::Device>>& devices,
@@ -241,7 +273,10 @@ SessionSummary run_realtime(haptics::Environment& environment, std::vector<std::
   clock_gettime(CLOCK_MONOTONIC, &origin);
   advance(origin, 20'000'000);  // the first tick 20 ms from now, once the threads are up
 
+  const CoreSplit cores = CoreSplit::make(settings.pin_haptic_core);
+  std::atomic<int> haptic_core{-1};
   std::thread haptic([&] {
+    if (cores.pin_haptic()) haptic_core = cores.haptic;
     if (settings.realtime_priority) {
       sched_param p{};
       p.sched_priority = std::min(80, sched_get_priority_max(SCHED_FIFO));
@@ -290,6 +325,7 @@ SessionSummary run_realtime(haptics::Environment& environment, std::vector<std::
   });
 
   std::thread solver([&] {
+    cores.pin_other();
     try {
       for (;;) {
         if (!requests.take()) {
@@ -318,6 +354,7 @@ SessionSummary run_realtime(haptics::Environment& environment, std::vector<std::
   });
 
   std::thread io([&] {
+    cores.pin_other();
     try {
       const std::size_t batch = 1024;
       std::vector<DeviceSample> popped(batch * static_cast<std::size_t>(m));
@@ -366,6 +403,7 @@ SessionSummary run_realtime(haptics::Environment& environment, std::vector<std::
   t.skipped_frames = skipped;
   t.dropped_samples = dropped;
   t.realtime_priority = priority_granted;
+  t.haptic_core = haptic_core;
   return summary;
 }
 

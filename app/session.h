@@ -40,6 +40,9 @@ struct SessionSettings {
   // Real time: ask for SCHED_FIFO for the haptic thread (granted to root or with CAP_SYS_NICE;
   // without it the thread runs at normal priority, and the summary says so).
   bool realtime_priority = true;
+  // Real time on a machine with 2 or more cores: the haptic thread on the last core alone, the
+  // solver and I/O threads (and the threads they start) on the others.
+  bool pin_haptic_core = true;
 };
 
 // Real-time figures (zero in lockstep).
@@ -52,6 +55,7 @@ struct TimingSummary {
   long skipped_frames = 0;    // frames whose samples a newer frame replaced before the solver took them
   long dropped_samples = 0;   // ticks the recording ring had no room for (lost from the recording)
   bool realtime_priority = false;
+  int haptic_core = -1;  // the core the haptic thread had to itself (-1: not pinned)
 };
 
 struct SessionSummary {

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <stdexcept>
 
 namespace fetouch::fem {
 
@@ -127,7 +128,12 @@ StepReport NewtonDriver::newton(double lambda, const NewtonSettings& s, double r
     // Inexact Newton: far from the solution 1e-3; once the residual has dropped a hundredfold (the
     // quadratic regime), aim the step straight at the convergence tolerance.
     const double eta = norm < 5e-2 * reference ? 0.5 * s.relative_tolerance * reference / norm : 1e-3;
-    system_.solve(r, du, std::clamp(eta, 1e-12, 1e-3), /*zero_guess=*/true);
+    try {
+      system_.solve(r, du, std::clamp(eta, 1e-12, 1e-3), /*zero_guess=*/true);
+    } catch (const std::runtime_error& e) {  // a singular tangent (past a limit point): the step fails
+      report.failure = e.what();
+      return report;
+    }
     for (Term* term : terms_) term->complete_step(system_, du);
     // Backtracking: halve until the residual decreases and no term rejects the state. The full step
     // is assembled with its tangent, which the next iteration then reuses (one assembly per Newton

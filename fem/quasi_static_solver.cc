@@ -30,6 +30,8 @@ std::vector<std::string> QuasiStaticSolver::terms() const {
   return names;
 }
 
+void QuasiStaticSolver::set_deterministic_factorisations(bool on) { impl_->system.tangent().set_deterministic(on); }
+
 void QuasiStaticSolver::use_algebraic_multigrid(bool on) {
   impl_->method = on ? TangentSystem::Method::amg : TangentSystem::Method::factorisation;
   impl_->set_up = false;

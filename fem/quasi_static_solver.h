@@ -49,6 +49,10 @@ class QuasiStaticSolver {
   // Linear solves by CG with algebraic multigrid (GAMG, rigid-body near-null space) instead of CG
   // on a stale sparse Cholesky factorisation: for meshes too large to factorise.
   void use_algebraic_multigrid(bool on);
+  // Whether a background factorisation is taken up at a fixed frame (true: reproducible, the
+  // default, and what replays use in both clocks, so that real time equals lockstep up to the first
+  // late answer) or as soon as it is ready. tangent_system.h.
+  void set_deterministic_factorisations(bool on);
   QuasiStaticSolver(QuasiStaticSolver&&) noexcept;
   QuasiStaticSolver& operator=(QuasiStaticSolver&&) noexcept;
 

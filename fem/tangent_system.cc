@@ -1,6 +1,10 @@
 #include "fem/tangent_system.h"
 
+#include "fem/background_factoriser.h"
+
 #include <dlfcn.h>
+#include <pthread.h>
+#include <sched.h>
 #include <petscksp.h>
 
 #include <algorithm>
@@ -16,15 +20,18 @@
 
 namespace fetouch::fem {
 
+void limit_library_threads();
+double seconds_since(std::chrono::steady_clock::time_point start);
+
 namespace {
 
 void check(PetscErrorCode code, const char* what) {
   if (code != 0) throw std::runtime_error(std::string("PETSc error ") + std::to_string(code) + " in " + what);
 }
 
-double since(std::chrono::steady_clock::time_point start) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-}
+double since(std::chrono::steady_clock::time_point start) { return seconds_since(start); }
+
+}  // namespace
 
 // One thread inside the libraries: CHOLMOD's OpenMP and OpenBLAS's threads would compete with the
 // solver's own assembly thread and the haptic thread for the 2 cores. Measured: a frame at 12,240
@@ -41,7 +48,11 @@ void limit_library_threads() {
   (void)done;
 }
 
-}  // namespace
+
+
+double seconds_since(std::chrono::steady_clock::time_point start) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
 
 struct TangentSystem::Petsc {
   Mat mat = nullptr;
@@ -60,58 +71,21 @@ struct TangentSystem::Petsc {
   ~Petsc() { destroy(); }
 };
 
-// The background factoriser: a thread with a factor of its own, fed a snapshot of K's values.
-// Only the solver thread talks to it (the haptic tick never does), through a mutex.
-struct TangentSystem::Worker {
-  std::unique_ptr<CholeskyFactor> factor;
-  std::vector<double> values;
-  std::mutex mutex;
-  std::condition_variable cv;
-  bool requested = false, done = false, ok = false, stop = false;
-  double seconds = 0;
-  std::thread thread;
-
-  Worker(int n, const int* row_start, const int* columns)
-      : factor(std::make_unique<CholeskyFactor>(n, row_start, columns)), thread([this] { run(); }) {}
-  ~Worker() {
-    {
-      std::lock_guard<std::mutex> lock(mutex);
-      stop = true;
-    }
-    cv.notify_all();
-    thread.join();
-  }
-  void run() {
-    limit_library_threads();
-    std::unique_lock<std::mutex> lock(mutex);
-    for (;;) {
-      cv.wait(lock, [this] { return stop || (requested && !done); });
-      if (stop) return;
-      lock.unlock();
-      const auto start = std::chrono::steady_clock::now();
-      const bool success = factor->factorise(values.data());
-      const double took = since(start);
-      lock.lock();
-      ok = success, seconds = took, done = true;
-      cv.notify_all();
-    }
-  }
-};
-
 TangentSystem::TangentSystem(MPI_Comm comm) : comm_(comm), petsc_(std::make_unique<Petsc>()) {
   limit_library_threads();
   MPI_Comm_size(comm_, &ranks_);
 }
 
+
 TangentSystem::~TangentSystem() = default;
+
+
 
 std::size_t TangentSystem::rows() const { return row_start_.empty() ? 0 : row_start_.size() - 1; }
 
 void TangentSystem::set_pattern(std::vector<int> row_start, std::vector<int> columns, Method method, int owned_begin,
                                 int owned_end, const std::vector<std::vector<double>>& near_null_space) {
-  worker_.reset();
-  factor_.reset();
-  frames_since_request_ = -1;
+  reset_cholmod();
   petsc_->destroy();
   row_start_ = std::move(row_start);
   columns_ = std::move(columns);
@@ -142,11 +116,7 @@ void TangentSystem::set_pattern(std::vector<int> row_start, std::vector<int> col
     check(VecCreateMPIWithArray(comm_, 1, local, n, nullptr, &p.x), "creating a vector");
   }
   direct_cholmod_ = ranks_ == 1 && method == Method::factorisation;
-  if (direct_cholmod_) {
-    factor_ = std::make_unique<CholeskyFactor>(n, row_start_.data(), columns_.data());
-    worker_ = std::make_unique<Worker>(n, row_start_.data(), columns_.data());
-    for (auto* v : {&r_, &z_, &p_, &q_}) v->assign(n, 0.0);
-  }
+  if (direct_cholmod_) set_up_cholmod();
   near_null_vectors_ = static_cast<int>(near_null_space.size());
   near_null_space_.clear();
   for (const auto& v : near_null_space) near_null_space_.insert(near_null_space_.end(), v.begin() + owned_begin, v.begin() + owned_end);
@@ -373,154 +343,6 @@ TangentSystem::SolveStats TangentSystem::apply_factorisation(const double* b, do
     }
   }
   stats.solve_s += since(start);
-  return stats;
-}
-
-// ---- one rank: CHOLMOD directly, background factorisations ---------------------------------------
-
-bool TangentSystem::factor_cholmod(SolveStats& stats) {
-  limit_library_threads();
-  const auto start = std::chrono::steady_clock::now();
-  const bool ok = factor_->factorise(values_.data());
-  stats.factor_s += since(start);
-  if (!ok) {  // not positive definite: PETSc's MUMPS LDL' from now on (for this pattern)
-    direct_cholmod_ = false;
-    worker_.reset();
-    create_solver(MATSOLVERMUMPS);
-    refactor_ = true;
-    return false;
-  }
-  refactor_ = false;
-  baseline_iterations_ = -1;
-  ++factorisations_;
-  stats.refactored = true;
-  return true;
-}
-
-// A factorisation of K as it is now, taken up `swap_after_frames` frames later. On one rank the
-// worker makes it meanwhile; through PETSc (MPI) the snapshot is factorised when it is taken up, so
-// that both follow the same schedule and factorise the same matrices (MPI = serial).
-void TangentSystem::request_background() {
-  if (frames_since_request_ >= 0) return;
-  if (!worker_) {
-    snapshot_ = values_;
-    frames_since_request_ = 0;
-    return;
-  }
-  {
-    std::lock_guard<std::mutex> lock(worker_->mutex);
-    worker_->values = values_;
-    worker_->requested = true;
-    worker_->done = false;
-  }
-  worker_->cv.notify_all();
-  frames_since_request_ = 0;
-}
-
-double TangentSystem::take_background(bool wait) {
-  if (frames_since_request_ < 0) return 0;
-  const auto start = std::chrono::steady_clock::now();
-  if (!worker_) {  // PETSc: factorise the snapshot now, then restore K's current values
-    frames_since_request_ = -1;
-    values_.swap(snapshot_);
-    push_values();
-    SolveStats stats;
-    const PetscErrorCode code = [&] {
-      try {
-        factor(stats);
-        return PetscErrorCode(0);
-      } catch (const std::runtime_error&) {
-        return PetscErrorCode(1);
-      }
-    }();
-    values_.swap(snapshot_);
-    push_values();
-    if (code != 0) refactor_ = true;  // that K was singular: the next solve refactors the current one
-    return since(start);
-  }
-  std::unique_lock<std::mutex> lock(worker_->mutex);
-  if (wait) worker_->cv.wait(lock, [this] { return worker_->done; });
-  const double waited = since(start);
-  if (!worker_->done) return waited;
-  worker_->requested = worker_->done = false;
-  frames_since_request_ = -1;
-  last_background_s_ = worker_->seconds;
-
-  if (!worker_->ok) {  // that K was not positive definite: the next solve refactors (and falls back)
-    refactor_ = true;
-    return waited;
-  }
-  std::swap(factor_, worker_->factor);
-  baseline_iterations_ = -1;
-  ++factorisations_;
-  ++background_factorisations_;
-  return waited;
-}
-
-double TangentSystem::begin_frame(bool frame) {
-  in_frame_ = frame && method_ == Method::factorisation;
-  if (frames_since_request_ < 0) return 0;
-  ++frames_since_request_;
-  if (!deterministic_) return take_background(/*wait=*/false);
-  if (frames_since_request_ >= swap_after_frames || !in_frame_) return take_background(/*wait=*/true);
-  return 0;
-}
-
-// Preconditioned CG on the current K with the factorisation of an earlier one; a fresh
-// factorisation solves directly.
-TangentSystem::SolveStats TangentSystem::solve_cholmod(const double* b, double* x, double tolerance, bool zero_guess) {
-  SolveStats stats;
-  const int n = static_cast<int>(rows());
-  if (zero_guess) std::fill(x, x + n, 0.0);
-  const auto direct = [&] {
-    const auto start = std::chrono::steady_clock::now();
-    factor_->solve(b, x);
-    stats.solve_s += since(start);
-  };
-  if (!factor_->valid() || refactor_) {
-    if (!factor_cholmod(stats)) return solve(b, x, tolerance, false);
-    direct();
-    return stats;
-  }
-  const auto start = std::chrono::steady_clock::now();
-  const auto dot = [n](const std::vector<double>& a, const std::vector<double>& c) {
-    return std::inner_product(a.begin(), a.begin() + n, c.begin(), 0.0);
-  };
-  const double b_norm = std::sqrt(std::inner_product(b, b + n, b, 0.0));
-  multiply(x, q_.data());
-  for (int i = 0; i < n; ++i) r_[i] = b[i] - q_[i];
-  const double target = tolerance * b_norm;
-  const int limit = in_frame_ ? max_background_cg_iterations : max_cg_iterations;
-  bool converged = std::sqrt(dot(r_, r_)) <= target;
-  int iterations = 0;
-  double rz = 0;
-  for (; !converged && iterations < limit; ++iterations) {
-    factor_->solve(r_.data(), z_.data());
-    const double rz_new = dot(r_, z_);
-    if (iterations == 0) p_ = z_;
-    else
-      for (int i = 0; i < n; ++i) p_[i] = z_[i] + (rz_new / rz) * p_[i];
-    rz = rz_new;
-    multiply(p_.data(), q_.data());
-    const double alpha = rz / dot(p_, q_);
-    if (!std::isfinite(alpha)) break;
-    for (int i = 0; i < n; ++i) x[i] += alpha * p_[i], r_[i] -= alpha * q_[i];
-    converged = std::sqrt(dot(r_, r_)) <= target;
-  }
-  stats.iterations = iterations;
-  stats.solve_s += since(start);
-  if (converged) {
-    if (baseline_iterations_ < 0) baseline_iterations_ = iterations;
-    if (iterations > std::max(refactor_after_iterations, 3 * baseline_iterations_ / 2)) {
-      if (in_frame_) request_background();
-      else refactor_ = true;
-    }
-    return stats;
-  }
-  // CG on the old factorisation did not get there: factorise K now and solve directly.
-  std::fill(x, x + n, 0.0);
-  if (!factor_cholmod(stats)) return solve(b, x, tolerance, true);
-  direct();
   return stats;
 }
 

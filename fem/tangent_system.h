@@ -109,6 +109,8 @@ class TangentSystem {
   bool cholmod() const { return direct_cholmod_; }
   SolveStats solve_cholmod(const double* b, double* x, double tolerance, bool zero_guess);
   bool factor_cholmod(SolveStats& stats);  // false: not positive definite (PETSc takes over)
+  void set_up_cholmod();
+  void reset_cholmod();
   void request_background();
   void push_values();  // tells PETSc the values changed
   double take_background(bool wait);

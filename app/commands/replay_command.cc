@@ -264,6 +264,7 @@ void write_summary(std::ostream& out, const ReplayOptions& o, const config::Scen
     json.key("skipped_frames").value(t.skipped_frames);
     json.key("dropped_samples").value(t.dropped_samples);
     json.key("realtime_priority").value(t.realtime_priority);
+    json.key("haptic_core").value(static_cast<long>(t.haptic_core));
   }
   json.key("newton_failures").value(s.newton_failures);
   json.key("max_force_n").value(s.max_force_n);
@@ -425,10 +426,12 @@ int run_replay(const ReplayOptions& o) {
                 summary.min_stability_margin, summary.newton_failures);
     if (o.clock == "realtime") {
       const TimingSummary& t = summary.timing;
-      std::printf("  real time%s: tick period p50 %.3f ms, p99 %.3f ms, max %.3f ms; %ld late ticks; "
-                  "%ld frame overruns, %ld frames skipped\n",
-                  t.realtime_priority ? " (SCHED_FIFO)" : " (normal priority)", 1e3 * t.period_p50_s, 1e3 * t.period_p99_s,
-                  1e3 * t.period_max_s, t.tick_overruns, t.frame_overruns, t.skipped_frames);
+      const std::string core = t.haptic_core >= 0 ? ", haptic thread alone on core " + std::to_string(t.haptic_core) : "";
+      std::printf("  real time%s%s: tick period p50 %.3f ms, p99 %.3f ms, max %.3f ms; lateness p99 %.1f us, max %.1f us; "
+                  "%ld late ticks; %ld frame overruns, %ld frames skipped\n",
+                  t.realtime_priority ? " (SCHED_FIFO)" : " (normal priority)", core.c_str(), 1e3 * t.period_p50_s,
+                  1e3 * t.period_p99_s, 1e3 * t.period_max_s, 1e6 * t.lateness_p99_s, 1e6 * t.lateness_max_s,
+                  t.tick_overruns, t.frame_overruns, t.skipped_frames);
     }
     std::printf("  wrote %s, %s", recording.string().c_str(), (out / "summary.json").string().c_str());
     if (o.mesh_every > 0) std::printf(" and %s (open in ParaView)", (out / (scene.name + ".pvd")).string().c_str());

@@ -1,0 +1,63 @@
+// TangentSystem's background factoriser (internal to fem/: tangent_system.cc creates and destroys
+// it, tangent_system_cholmod.cc drives it): a thread with a CHOLMOD factor of its own, fed a
+// snapshot of K's values. Only the solver thread talks to it (the haptic tick never does).
+#pragma once
+
+#include <pthread.h>
+#include <sched.h>
+
+#include <chrono>
+#include <condition_variable>
+#include <memory>
+#include <mutex>
+#include <thread>
+#include <vector>
+
+#include "fem/cholesky_factor.h"
+#include "fem/tangent_system.h"
+
+namespace fetouch::fem {
+
+void limit_library_threads();  // one thread inside CHOLMOD's OpenMP and OpenBLAS (tangent_system.cc)
+
+struct TangentSystem::Worker {
+  std::unique_ptr<CholeskyFactor> factor;
+  std::vector<double> values;
+  std::mutex mutex;
+  std::condition_variable cv;
+  bool requested = false, done = false, ok = false, stop = false;
+  double seconds = 0;
+  cpu_set_t affinity{};  // the requesting thread's cores: the worker runs where the solver may
+  bool pinned = false;
+  std::thread thread;
+
+  Worker(int n, const int* row_start, const int* columns)
+      : factor(std::make_unique<CholeskyFactor>(n, row_start, columns)), thread([this] { run(); }) {}
+  ~Worker() {
+    {
+      std::lock_guard<std::mutex> lock(mutex);
+      stop = true;
+    }
+    cv.notify_all();
+    thread.join();
+  }
+  void run() {
+    limit_library_threads();
+    std::unique_lock<std::mutex> lock(mutex);
+    for (;;) {
+      cv.wait(lock, [this] { return stop || (requested && !done); });
+      if (stop) return;
+      if (pinned) pthread_setaffinity_np(pthread_self(), sizeof affinity, &affinity);
+      lock.unlock();
+      const auto start = std::chrono::steady_clock::now();
+      const bool success = factor->factorise(values.data());
+      const double took = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+      lock.lock();
+      ok = success, seconds = took, done = true;
+      cv.notify_all();
+    }
+  }
+};
+
+
+}  // namespace fetouch::fem

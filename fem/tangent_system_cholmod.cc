@@ -1,0 +1,192 @@
+// TangentSystem on one rank with CHOLMOD called directly: the background factoriser, the schedule
+// on which its factorisations are taken up (shared with the PETSc path, so that MPI = serial), and
+// conjugate gradients preconditioned by the current factorisation. tangent_system.h says why.
+#include <petscksp.h>
+#include <pthread.h>
+#include <sched.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <condition_variable>
+#include <mutex>
+#include <numeric>
+#include <stdexcept>
+#include <thread>
+
+#include "fem/background_factoriser.h"
+#include "fem/tangent_system.h"
+
+namespace fetouch::fem {
+
+void limit_library_threads();  // tangent_system.cc
+double seconds_since(std::chrono::steady_clock::time_point start);
+
+namespace {
+double since(std::chrono::steady_clock::time_point start) { return seconds_since(start); }
+}  // namespace
+
+void TangentSystem::reset_cholmod() {
+  worker_.reset();
+  factor_.reset();
+  frames_since_request_ = -1;
+}
+
+void TangentSystem::set_up_cholmod() {
+  const int n = static_cast<int>(rows());
+  factor_ = std::make_unique<CholeskyFactor>(n, row_start_.data(), columns_.data());
+  worker_ = std::make_unique<Worker>(n, row_start_.data(), columns_.data());
+  for (auto* v : {&r_, &z_, &p_, &q_}) v->assign(n, 0.0);
+}
+
+// ---- one rank: CHOLMOD directly, background factorisations ---------------------------------------
+
+bool TangentSystem::factor_cholmod(SolveStats& stats) {
+  limit_library_threads();
+  const auto start = std::chrono::steady_clock::now();
+  const bool ok = factor_->factorise(values_.data());
+  stats.factor_s += since(start);
+  if (!ok) {  // not positive definite: PETSc's MUMPS LDL' from now on (for this pattern)
+    direct_cholmod_ = false;
+    worker_.reset();
+    push_values();  // PETSc has not seen K's values while CHOLMOD had them
+    create_solver(MATSOLVERMUMPS);
+    refactor_ = true;
+    return false;
+  }
+  refactor_ = false;
+  baseline_iterations_ = -1;
+  ++factorisations_;
+  stats.refactored = true;
+  return true;
+}
+
+// A factorisation of K as it is now, taken up `swap_after_frames` frames later. On one rank the
+// worker makes it meanwhile; through PETSc (MPI) the snapshot is factorised when it is taken up, so
+// that both follow the same schedule and factorise the same matrices (MPI = serial).
+void TangentSystem::request_background() {
+  if (frames_since_request_ >= 0) return;
+  if (!worker_) {
+    snapshot_ = values_;
+    frames_since_request_ = 0;
+    return;
+  }
+  {
+    std::lock_guard<std::mutex> lock(worker_->mutex);
+    worker_->values = values_;
+    worker_->pinned = pthread_getaffinity_np(pthread_self(), sizeof worker_->affinity, &worker_->affinity) == 0;
+    worker_->requested = true;
+    worker_->done = false;
+  }
+  worker_->cv.notify_all();
+  frames_since_request_ = 0;
+}
+
+double TangentSystem::take_background(bool wait) {
+  if (frames_since_request_ < 0) return 0;
+  const auto start = std::chrono::steady_clock::now();
+  if (!worker_) {  // PETSc: factorise the snapshot now, then restore K's current values
+    frames_since_request_ = -1;
+    values_.swap(snapshot_);
+    push_values();
+    SolveStats stats;
+    const PetscErrorCode code = [&] {
+      try {
+        factor(stats);
+        return PetscErrorCode(0);
+      } catch (const std::runtime_error&) {
+        return PetscErrorCode(1);
+      }
+    }();
+    values_.swap(snapshot_);
+    push_values();
+    if (code != 0) refactor_ = true;  // that K was singular: the next solve refactors the current one
+    return since(start);
+  }
+  std::unique_lock<std::mutex> lock(worker_->mutex);
+  if (wait) worker_->cv.wait(lock, [this] { return worker_->done; });
+  const double waited = since(start);
+  if (!worker_->done) return waited;
+  worker_->requested = worker_->done = false;
+  frames_since_request_ = -1;
+  last_background_s_ = worker_->seconds;
+
+  if (!worker_->ok) {  // that K was not positive definite: the next solve refactors (and falls back)
+    refactor_ = true;
+    return waited;
+  }
+  std::swap(factor_, worker_->factor);
+  baseline_iterations_ = -1;
+  ++factorisations_;
+  ++background_factorisations_;
+  return waited;
+}
+
+double TangentSystem::begin_frame(bool frame) {
+  in_frame_ = frame && method_ == Method::factorisation;
+  if (frames_since_request_ < 0) return 0;
+  ++frames_since_request_;
+  if (!deterministic_) return take_background(/*wait=*/false);
+  if (frames_since_request_ >= swap_after_frames || !in_frame_) return take_background(/*wait=*/true);
+  return 0;
+}
+
+// Preconditioned CG on the current K with the factorisation of an earlier one; a fresh
+// factorisation solves directly.
+TangentSystem::SolveStats TangentSystem::solve_cholmod(const double* b, double* x, double tolerance, bool zero_guess) {
+  SolveStats stats;
+  const int n = static_cast<int>(rows());
+  if (zero_guess) std::fill(x, x + n, 0.0);
+  const auto direct = [&] {
+    const auto start = std::chrono::steady_clock::now();
+    factor_->solve(b, x);
+    stats.solve_s += since(start);
+  };
+  if (!factor_->valid() || refactor_) {
+    if (!factor_cholmod(stats)) return solve(b, x, tolerance, false);
+    direct();
+    return stats;
+  }
+  const auto start = std::chrono::steady_clock::now();
+  const auto dot = [n](const std::vector<double>& a, const std::vector<double>& c) {
+    return std::inner_product(a.begin(), a.begin() + n, c.begin(), 0.0);
+  };
+  const double b_norm = std::sqrt(std::inner_product(b, b + n, b, 0.0));
+  multiply(x, q_.data());
+  for (int i = 0; i < n; ++i) r_[i] = b[i] - q_[i];
+  const double target = tolerance * b_norm;
+  const int limit = in_frame_ ? max_background_cg_iterations : max_cg_iterations;
+  bool converged = std::sqrt(dot(r_, r_)) <= target;
+  int iterations = 0;
+  double rz = 0;
+  for (; !converged && iterations < limit; ++iterations) {
+    factor_->solve(r_.data(), z_.data());
+    const double rz_new = dot(r_, z_);
+    if (iterations == 0) p_ = z_;
+    else
+      for (int i = 0; i < n; ++i) p_[i] = z_[i] + (rz_new / rz) * p_[i];
+    rz = rz_new;
+    multiply(p_.data(), q_.data());
+    const double alpha = rz / dot(p_, q_);
+    if (!std::isfinite(alpha)) break;
+    for (int i = 0; i < n; ++i) x[i] += alpha * p_[i], r_[i] -= alpha * q_[i];
+    converged = std::sqrt(dot(r_, r_)) <= target;
+  }
+  stats.iterations = iterations;
+  stats.solve_s += since(start);
+  if (converged) {
+    if (baseline_iterations_ < 0) baseline_iterations_ = iterations;
+    if (iterations > std::max(refactor_after_iterations, 3 * baseline_iterations_ / 2)) {
+      if (in_frame_) request_background();
+      else refactor_ = true;
+    }
+    return stats;
+  }
+  // CG on the old factorisation did not get there: factorise K now and solve directly.
+  std::fill(x, x + n, 0.0);
+  if (!factor_cholmod(stats)) return solve(b, x, tolerance, true);
+  direct();
+  return stats;
+}
+
+}  // namespace fetouch::fem
