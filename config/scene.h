@@ -163,8 +163,8 @@ struct Solver {
   double accuracy_position_m = 1e-5;
   double accuracy_force_n = 1e-3;
   // The relative error of the condensed compliance W a frame may hand over (the stability region
-  // is robust to 30 %): 1e-4 lets most frames update W in the span of the last one's columns.
-  double accuracy_compliance = 1e-4;
+  // is robust to 30 %): 1e-3 lets most frames update W in the span of the last one's columns.
+  double accuracy_compliance = 1e-3;
   // Newton iterations a frame may take before it carries the remainder to the next frame (0: no bound).
   int frame_newton_iterations = 4;
 };

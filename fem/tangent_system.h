@@ -137,6 +137,7 @@ class TangentSystem {
   struct Worker;
   std::unique_ptr<Worker> worker_;
   bool in_frame_ = false, deterministic_ = true;
+  bool primed_ = false;  // the worker has made its first (warm-up) factorisation for this pattern
   int frames_since_request_ = -1;  // -1: no background factorisation under way
   int background_factorisations_ = 0;
   double last_background_s_ = 0;
