@@ -78,10 +78,7 @@ void BM_FemFrame(benchmark::State& state) {
     const double took = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     if (took > worst) worst = took, slowest = frame;
     if (std::getenv("FETOUCH_TRACE_FRAMES") && took > 0.03)
-      std::fprintf(stderr, "frame %ld: %.1f ms; newton %d (assembly %.1f, factor %.1f, solve %.1f ms, cg %d); compliance (assembly %.1f, factor %.1f, solve %.1f ms, cg %d, galerkin %.1e%s)\n",
-                   frame, 1e3 * took, report.total_iterations, 1e3 * report.assembly_s, 1e3 * report.factorisation_s,
-                   1e3 * report.solve_s, report.linear_iterations, 1e3 * c.assembly_s, 1e3 * c.factorisation_s,
-                   1e3 * c.solves_s, c.linear_iterations, c.galerkin_residual, c.refined ? ", solved" : "");
+      std::fprintf(stderr, "frame %ld: %.1f ms; %s\n", frame, 1e3 * took, describe_frame(report, c).c_str());
     times.push_back(took);
     assembly += report.assembly_s + c.assembly_s;
     factorisation += report.factorisation_s + c.factorisation_s;

@@ -6,7 +6,6 @@
 #include <pthread.h>
 #include <sched.h>
 
-#include <chrono>
 #include <condition_variable>
 #include <memory>
 #include <mutex>
@@ -26,7 +25,6 @@ struct TangentSystem::Worker {
   std::mutex mutex;
   std::condition_variable cv;
   bool requested = false, done = false, ok = false, stop = false;
-  double seconds = 0;
   cpu_set_t affinity{};  // the requesting thread's cores: the worker runs where the solver may
   bool pinned = false;
   std::thread thread;
@@ -49,11 +47,9 @@ struct TangentSystem::Worker {
       if (stop) return;
       if (pinned) pthread_setaffinity_np(pthread_self(), sizeof affinity, &affinity);
       lock.unlock();
-      const auto start = std::chrono::steady_clock::now();
       const bool success = factor->factorise(values.data());
-      const double took = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
       lock.lock();
-      ok = success, seconds = took, done = true;
+      ok = success, done = true;
       cv.notify_all();
     }
   }

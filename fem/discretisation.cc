@@ -140,8 +140,7 @@ std::vector<std::vector<double>> Discretisation::rigid_body_modes(const std::vec
   return modes;
 }
 
-const Discretisation::Cells& Discretisation::cells() const {
-  if (cells_built_) return cells_;
+void Discretisation::build_cells() const {
   Cells& c = cells_;
   c.n = fe->n_dofs_per_cell();
   c.nq = quadrature->size();
@@ -178,7 +177,6 @@ const Discretisation::Cells& Discretisation::cells() const {
     ++k;
   }
   cells_built_ = true;
-  return c;
 }
 
 void Discretisation::gather(unsigned int k, const Vector<double>& global, double* local) const {

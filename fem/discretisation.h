@@ -67,7 +67,10 @@ class Discretisation {
     std::vector<double> shape_values;            // [q][base], the same on every cell
     std::vector<dealii::types::material_id> material_id;  // [cell]
   };
-  const Cells& cells() const;
+  const Cells& cells() const {
+    if (!cells_built_) build_cells();
+    return cells_;
+  }
 
   // Cell k's entries of a global vector.
   void gather(unsigned int k, const dealii::Vector<double>& global, double* local) const;
@@ -76,6 +79,7 @@ class Discretisation {
 
  private:
   void partition();
+  void build_cells() const;
   mutable Cells cells_;
   mutable bool cells_built_ = false;
 };

@@ -98,16 +98,10 @@ void FemEnvironment::solve(const std::vector<haptics::ContactSample>& samples, l
   out.frame = frame;
   // FETOUCH_TRACE_FRAMES=1: where each frame's time went, one line per frame on standard error.
   static const bool trace = std::getenv("FETOUCH_TRACE_FRAMES") != nullptr;
-  if (trace) {
-    const ComplianceTimes& c = solver_->last_compliance_times();
-    std::fprintf(stderr,
-                 "frame %ld: %.1f ms; newton %d%s (assembly %.1f, factor %.1f, solve %.1f ms, cg %d); compliance "
-                 "(assembly %.1f, factor %.1f, solve %.1f ms, cg %d, galerkin %.1e%s)\n",
-                 frame, 1e3 * out.status.seconds, report.total_iterations, report.carried ? " carried" : "",
-                 1e3 * report.assembly_s, 1e3 * report.factorisation_s, 1e3 * report.solve_s, report.linear_iterations,
-                 1e3 * c.assembly_s, 1e3 * c.factorisation_s, 1e3 * c.solves_s, c.linear_iterations, c.galerkin_residual,
-                 c.refined ? ", solved" : "");
-  }
+  if (trace)
+    std::fprintf(stderr, "frame %ld: %.1f ms; %s\n", frame, 1e3 * out.status.seconds,
+                 describe_frame(report, solver_->last_compliance_times()).c_str());
+
 }
 
 }  // namespace fetouch::fem

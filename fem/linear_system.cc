@@ -18,17 +18,6 @@ using namespace dealii;
 
 namespace {
 
-// g(x) scaled, as a deal.II Function.
-class ScaledField : public Function<3> {
- public:
-  ScaledField(const Field& field, double scale) : Function<3>(3), field_(field), scale_(scale) {}
-  double value(const Point<3>& p, const unsigned int component) const override { return scale_ * field_(p)[component]; }
-
- private:
-  const Field& field_;
-  double scale_;
-};
-
 ComponentMask mask(const std::array<bool, 3>& components) { return ComponentMask({components[0], components[1], components[2]}); }
 
 }  // namespace
@@ -72,7 +61,7 @@ const int* LinearSystem::cell_scatter(unsigned int k) const {
   const Discretisation::Cells& c = d_.cells();
   const unsigned int n = c.n;
   if (scatter_.empty()) {  // built once per set of supports
-    auto& scatter = const_cast<std::vector<int>&>(scatter_);
+    std::vector<int>& scatter = scatter_;
     const unsigned int cells = d_.n_cells();
     scatter.resize(std::size_t(cells) * n * n);
     for (unsigned int cell = 0; cell < cells; ++cell) {

@@ -4,6 +4,7 @@
 // an optional dense rank-one part c g g' (a fluid cavity's), and the time each phase took.
 #pragma once
 
+#include <deal.II/base/function.h>
 #include <deal.II/base/point.h>
 #include <deal.II/base/tensor.h>
 #include <deal.II/lac/affine_constraints.h>
@@ -19,6 +20,19 @@
 namespace fetouch::fem {
 
 using Field = std::function<dealii::Tensor<1, 3>(const dealii::Point<3>&)>;
+
+// scale * g(x) as a deal.II Function (interpolation, error norms); keeps a reference to the field.
+class ScaledField : public dealii::Function<3> {
+ public:
+  ScaledField(const Field& field, double scale) : dealii::Function<3>(3), field_(field), scale_(scale) {}
+  double value(const dealii::Point<3>& p, const unsigned int component) const override {
+    return scale_ * field_(p)[component];
+  }
+
+ private:
+  const Field& field_;
+  double scale_;
+};
 
 // u = lambda g(x) on the selected components of a boundary region.
 struct Support {
@@ -75,7 +89,7 @@ class LinearSystem {
   const Discretisation& d_;
   dealii::AffineConstraints<double> constraints_;
   std::vector<bool> constrained_;
-  std::vector<int> scatter_;
+  mutable std::vector<int> scatter_;  // built on first use
   TangentSystem tangent_;
   double rank_one_c_ = 0;
   const dealii::Vector<double>* rank_one_g_ = nullptr;

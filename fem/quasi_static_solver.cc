@@ -2,8 +2,12 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cstdio>
 #include <cmath>
 #include <stdexcept>
+
+#include <deal.II/dofs/dof_tools.h>
+#include <deal.II/fe/component_mask.h>
 
 #include "fem/boundary_geometry.h"
 #include "fem/solver_parts.h"
@@ -11,6 +15,17 @@
 namespace fetouch::fem {
 
 using namespace dealii;
+
+std::string describe_frame(const SolveReport& r, const ComplianceTimes& c) {
+  char line[400];
+  std::snprintf(line, sizeof line,
+                "newton %d%s (assembly %.1f, factor %.1f, solve %.1f ms, cg %d); compliance (assembly %.1f, factor "
+                "%.1f, solve %.1f ms, cg %d, galerkin %.1e%s)",
+                r.total_iterations, r.carried ? " carried" : "", 1e3 * r.assembly_s, 1e3 * r.factorisation_s,
+                1e3 * r.solve_s, r.linear_iterations, 1e3 * c.assembly_s, 1e3 * c.factorisation_s, 1e3 * c.solves_s,
+                c.linear_iterations, c.galerkin_residual, c.refined ? ", solved" : "");
+  return line;
+}
 
 QuasiStaticSolver::QuasiStaticSolver(const Triangulation<3>& triangulation, const Material& material, int degree,
                                      MPI_Comm comm)
@@ -219,18 +234,11 @@ Tensor<1, 3> QuasiStaticSolver::boundary_force(unsigned int boundary_id) const {
   Vector<double> r(m.d.n_dofs()), internal(m.d.n_dofs());
   if (!m.driver.assemble(1.0, r, false, &internal)) throw std::runtime_error("boundary_force: an element is inverted");
   Tensor<1, 3> force;
-  const std::vector<int> component = m.d.dof_components();
-  // The region's dofs, each once.
-  std::vector<bool> on_region(m.d.n_dofs(), false);
-  std::vector<types::global_dof_index> indices(m.d.fe->n_dofs_per_face());
-  for (const auto& cell : m.d.dof.active_cell_iterators())
-    for (const unsigned int f : cell->face_indices()) {
-      if (!cell->face(f)->at_boundary() || cell->face(f)->boundary_id() != boundary_id) continue;
-      cell->face(f)->get_dof_indices(indices);
-      for (const auto i : indices) on_region[i] = true;
-    }
-  for (types::global_dof_index i = 0; i < m.d.n_dofs(); ++i)
-    if (on_region[i]) force[component[i]] += internal[i];
+  for (int c = 0; c < 3; ++c) {
+    ComponentMask mask(3, false);
+    mask.set(c, true);
+    for (const auto i : DoFTools::extract_boundary_dofs(m.d.dof, mask, {types::boundary_id(boundary_id)})) force[c] += internal[i];
+  }
   return force;
 }
 

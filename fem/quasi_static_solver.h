@@ -36,6 +36,9 @@
 
 namespace fetouch::fem {
 
+// Where a frame's time went, one line: its Newton iterations and phases, and its compliance's.
+std::string describe_frame(const SolveReport& solve, const ComplianceTimes& compliance);
+
 class QuasiStaticSolver {
  public:
 

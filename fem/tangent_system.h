@@ -97,7 +97,6 @@ class TangentSystem {
   // CG iterations allowed on a stale factorisation while a new one is made in the background.
   int max_background_cg_iterations = 30;
   int background_factorisations() const { return background_factorisations_; }
-  double last_background_s() const { return last_background_s_; }  // the worker's last factorisation
   int max_cg_iterations = 8;
   // When CG took more than this many iterations, the next solve refactors.
   int refactor_after_iterations = 5;
@@ -140,7 +139,6 @@ class TangentSystem {
   bool primed_ = false;  // the worker has made its first (warm-up) factorisation for this pattern
   int frames_since_request_ = -1;  // -1: no background factorisation under way
   int background_factorisations_ = 0;
-  double last_background_s_ = 0;
   std::vector<double> r_, z_, p_, q_;  // CG's vectors
   std::vector<double> snapshot_;       // PETSc: the K to factorise when taken up
 };

@@ -124,7 +124,6 @@ double TangentSystem::take_background(bool wait) {
   if (!worker_->done) return waited;
   worker_->requested = worker_->done = false;
   frames_since_request_ = -1;
-  last_background_s_ = worker_->seconds;
 
   if (!worker_->ok) {  // that K was not positive definite: the next solve refactors (and falls back)
     refactor_ = true;

@@ -1,0 +1,242 @@
+// The sections of a scene that configure the session: `solver`, `haptics`, `probes`, and the
+// rules that tie sections together.
+#include <yaml-cpp/yaml.h>
+
+#include <algorithm>
+#include <cmath>
+#include <set>
+#include <string>
+
+#include "config/section_readers.h"
+
+namespace fetouch::config {
+namespace detail {
+namespace {
+
+const Choices<LinearSolver> kLinearSolvers{{"auto", LinearSolver::automatic},
+                                           {"direct", LinearSolver::direct},
+                                           {"cg_amg", LinearSolver::cg_amg}};
+const Choices<LocalModelType> kLocalModels{{"p", LocalModelType::p},
+                                           {"pi", LocalModelType::pi},
+                                           {"smith", LocalModelType::smith},
+                                           {"pi_smith", LocalModelType::pi_smith}};
+const Choices<HoldType> kHolds{{"zoh", HoldType::zoh}, {"foh", HoldType::foh}};
+const Choices<DeviceType> kDevices{{"replay", DeviceType::replay},
+                                   {"operator", DeviceType::operator_model},
+                                   {"phantom", DeviceType::phantom},
+                                   {"mouse", DeviceType::mouse}};
+}  // namespace
+
+// ---- solver and haptics -------------------------------------------------------------------------
+
+void read_solver(MapView& scene, Solver& out) {
+  const Entry e = scene.entry("solver");
+  Reader& reader = scene.reader();
+  MapView map(reader, e.value, e.path, e.key_mark,
+              {"rate_hz", "newton", "linear_solver", "direct_max_dofs", "accuracy", "frame_newton_iterations"});
+  if (!map.valid()) return;
+  map.number("rate_hz", out.rate_hz, Range::positive());
+  map.choice("linear_solver", out.linear_solver, kLinearSolvers);
+  map.integer("direct_max_dofs", out.direct_max_dofs, {1, 1e9});
+  map.integer("frame_newton_iterations", out.frame_newton_iterations, {0, 1000});
+  if (map.has("accuracy")) {
+    const Entry a = map.entry("accuracy");
+    if (a.value.IsScalar() && a.value.Scalar() == "none") {
+      out.accuracy_position_m = out.accuracy_force_n = 0;
+      out.accuracy_compliance = 1e-6;
+    } else {
+      MapView accuracy(reader, a.value, a.path, a.key_mark, {"position_m", "force_n", "compliance"});
+      if (accuracy.valid()) {
+        accuracy.number("position_m", out.accuracy_position_m, Range::positive());
+        accuracy.number("force_n", out.accuracy_force_n, Range::positive());
+        accuracy.number("compliance", out.accuracy_compliance, {1e-12, 0.1});
+      }
+    }
+  }
+  if (map.has("newton")) {
+    const Entry n = map.entry("newton");
+    MapView newton(reader, n.value, n.path, n.key_mark,
+                   {"relative_tolerance", "absolute_tolerance", "max_iterations", "line_search",
+                    "max_load_step_cuts"});
+    if (!newton.valid()) return;
+    newton.number("relative_tolerance", out.newton_relative_tolerance, {0, 1, true, true});
+    newton.number("absolute_tolerance", out.newton_absolute_tolerance, Range::positive());
+    newton.integer("max_iterations", out.newton_max_iterations, {1, 1000});
+    newton.boolean("line_search", out.line_search);
+    newton.integer("max_load_step_cuts", out.max_load_step_cuts, {0, 30});
+  }
+}
+
+void read_haptics(MapView& scene, Haptics& out) {
+  const Entry e = scene.entry("haptics");
+  Reader& reader = scene.reader();
+  MapView map(reader, e.value, e.path, e.key_mark,
+              {"rate_hz", "local_model", "hold", "gains", "robustness_margin", "max_force_n",
+               "max_force_rate_n_per_s", "watchdog_timeout_s", "coupling"});
+  if (!map.valid()) return;
+  map.boolean("coupling", out.coupling);
+  map.number("rate_hz", out.rate_hz, Range::positive());
+  map.choice("local_model", out.local_model, kLocalModels);
+  map.choice("hold", out.hold, kHolds);
+  map.number("robustness_margin", out.robustness_margin, {0, 1, false, true});
+  map.number("max_force_n", out.max_force_n, Range::positive());
+  map.number("max_force_rate_n_per_s", out.max_force_rate_n_per_s, Range::positive());
+  map.number("watchdog_timeout_s", out.watchdog_timeout_s, Range::positive());
+  if (!map.has("gains")) return;
+  const Entry g = map.entry("gains");
+  if (g.value.IsScalar()) {
+    if (g.value.Scalar() != "auto")
+      reader.error(g.value_mark, g.path,
+                   "expected 'auto' or a mapping {proportional_n_per_m: ..., integral_n_per_m: ...}, "
+                   "got " + detail::describe_node(g.value));
+    return;
+  }
+  MapView gains(reader, g.value, g.path, g.key_mark, {"proportional_n_per_m", "integral_n_per_m"});
+  if (!gains.valid()) return;
+  out.automatic_gains = false;
+  gains.number("proportional_n_per_m", out.proportional_n_per_m, Range::positive(), Need::required);
+  const bool integral = out.local_model == LocalModelType::pi ||
+                        out.local_model == LocalModelType::pi_smith;
+  if (integral)
+    gains.number("integral_n_per_m", out.integral_n_per_m, Range::positive(), Need::required);
+  else
+    reject_keys(gains, {"integral_n_per_m"},
+                std::string("by local model ") + name_of(kLocalModels, out.local_model) +
+                    " (only pi and pi_smith have an integral gain)");
+}
+
+// ---- probes -------------------------------------------------------------------------------------
+
+namespace {
+
+bool valid_name(const std::string& name) {
+  if (name.empty()) return false;
+  for (char c : name)
+    if (!(std::isalnum(static_cast<unsigned char>(c)) || c == '_' || c == '-')) return false;
+  return true;
+}
+
+}  // namespace
+
+namespace {
+
+void read_device(MapView& probe, Device& out) {
+  const Entry e = probe.entry("device");
+  Reader& reader = probe.reader();
+  MapView map(reader, e.value, e.path, e.key_mark, {"type", "trajectory", "hand", "name"});
+  if (!map.valid()) return;
+  if (!map.choice("type", out.type, kDevices, Need::required)) return;
+  const std::vector<std::string> trajectory_kinds{".csv", ".h5"};
+  switch (out.type) {
+    case DeviceType::replay:
+      reject_keys(map, {"hand", "name"}, "by a replay device");
+      map.existing_path("trajectory", out.trajectory, Need::required, trajectory_kinds);
+      break;
+    case DeviceType::operator_model: {
+      reject_keys(map, {"name"}, "by a virtual operator");
+      map.existing_path("trajectory", out.trajectory, Need::required, trajectory_kinds);
+      if (!map.has("hand")) break;
+      const Entry h = map.entry("hand");
+      MapView hand(reader, h.value, h.path, h.key_mark,
+                   {"mass_kg", "stiffness_n_per_m", "damping_n_s_per_m"});
+      if (!hand.valid()) break;
+      hand.number("mass_kg", out.hand.mass_kg, Range::positive());
+      hand.number("stiffness_n_per_m", out.hand.stiffness_n_per_m, Range::positive());
+      hand.number("damping_n_s_per_m", out.hand.damping_n_s_per_m, Range::non_negative());
+      break;
+    }
+    case DeviceType::phantom:
+      reject_keys(map, {"trajectory", "hand"}, "by a PHANTOM device");
+      map.text("name", out.phantom_name);
+      break;
+    case DeviceType::mouse:
+      reject_keys(map, {"trajectory", "hand", "name"}, "by the mouse");
+      break;
+  }
+}
+
+}  // namespace
+
+void read_probes(MapView& scene, std::vector<Probe>& out) {
+  const Entry e = scene.entry("probes");
+  Reader& reader = scene.reader();
+  if (e.value.IsNull()) return;
+  if (!e.value.IsSequence()) {
+    reader.error(e.value_mark, e.path,
+                 "expected a list of probes (- name: ..., device: ...), got " +
+                     detail::describe_node(e.value));
+    return;
+  }
+  std::set<std::string> names;
+  for (size_t i = 0; i < e.value.size(); ++i) {
+    const YAML::Node item = e.value[i];
+    MapView map(reader, item, e.path + "[" + std::to_string(i) + "]", item.Mark(),
+                {"name", "device", "radius_m"});
+    if (!map.valid()) continue;
+    Probe probe;
+    probe.where = {map.mark().line + 1, map.mark().column + 1};
+    if (map.text("name", probe.name, Need::required)) {
+      const Entry name = map.entry("name");
+      if (!valid_name(probe.name))
+        reader.error(name.value_mark, name.path,
+                     "'" + probe.name + "' is not a valid probe name; use letters, digits, _ and -");
+      else if (!names.insert(probe.name).second)
+        reader.error(name.value_mark, name.path,
+                     "probe name '" + probe.name + "' is used twice; probe names must be unique");
+    }
+    map.number("radius_m", probe.radius_m, Range::positive());
+    map.require("device", "where the probe's positions come from");
+    if (map.has("device")) read_device(map, probe.device);
+    out.push_back(probe);
+  }
+}
+
+// ---- cross-field checks -------------------------------------------------------------------------
+
+namespace {
+
+void check_rates(MapView& scene, const Scene& s) {
+  const double ratio = s.haptics.rate_hz / s.solver.rate_hz;
+  const double whole = std::round(ratio);
+  if (ratio >= 1 && std::abs(ratio - whole) <= 1e-9 * ratio) return;
+  Entry where = scene.entry("solver");
+  if (where.present && where.value.IsMap()) {
+    MapView solver(scene.reader(), where.value, where.path, where.value_mark,
+                   {"rate_hz", "newton", "linear_solver", "direct_max_dofs"});
+    where = solver.entry("rate_hz");
+    where.path = "solver.rate_hz";
+  }
+  scene.reader().error(where.value_mark, "solver.rate_hz",
+                       "the haptic rate (" + format_number(s.haptics.rate_hz) +
+                           " Hz) must be a whole multiple of the solver rate (" +
+                           format_number(s.solver.rate_hz) + " Hz); " +
+                           format_number(s.haptics.rate_hz / std::max(1.0, whole)) +
+                           " Hz would give N = " + format_number(std::max(1.0, whole)));
+}
+
+}  // namespace
+
+void check_cross_fields(MapView& scene, Scene& s) {
+  Reader& reader = scene.reader();
+  check_rates(scene, s);
+  if (!s.probes.empty() && !s.effects.has(Effect::contact))
+    reader.warning(scene.entry("effects").key_mark, "effects",
+                   "probes are defined but 'contact' is not among the effects, so they will not "
+                   "touch the tissue");
+  if (s.effects.has(Effect::incompressibility) &&
+      s.material.model != MaterialModel::neo_hookean_incompressible &&
+      s.material.model != MaterialModel::mooney_rivlin)
+    reader.warning(scene.entry("effects").key_mark, "effects",
+                   "incompressibility is meant for neo_hookean_incompressible or mooney_rivlin");
+}
+
+}  // namespace detail
+
+using namespace detail;
+
+const char* to_string(LinearSolver v) { return name_of(kLinearSolvers, v); }
+const char* to_string(LocalModelType v) { return name_of(kLocalModels, v); }
+const char* to_string(HoldType v) { return name_of(kHolds, v); }
+const char* to_string(DeviceType v) { return name_of(kDevices, v); }
+
+}  // namespace fetouch::config

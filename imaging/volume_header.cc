@@ -1,0 +1,157 @@
+// MetaImage and NRRD text headers, and the data they promise checked against what the file holds
+// before VTK reads it: VTK's readers crash or hang on compressed data that inflates to less (or far
+// more) than the header says, and on raw data cut short.
+#include "imaging/volume_header.h"
+
+#include <zlib.h>
+
+#include <cmath>
+#include <fstream>
+#include <map>
+#include <sstream>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+namespace fetouch::imaging {
+
+namespace {
+
+std::string trim(std::string t) {
+  t.erase(0, t.find_first_not_of(" \t\r"));
+  t.erase(t.find_last_not_of(" \t\r") + 1);
+  return t;
+}
+
+// The size of zlib (or gzip) data once inflated, reading at most `available` bytes from `in`;
+// -1 when the stream is cut short or corrupt.
+double inflated_size(std::istream& in, double available, bool gzip) {
+  z_stream z{};
+  if (inflateInit2(&z, gzip ? 16 + MAX_WBITS : MAX_WBITS) != Z_OK) return -1;
+  std::vector<char> input(1 << 16), output(1 << 16);
+  double total = 0, left = available;
+  int status = Z_OK;
+  while (status != Z_STREAM_END) {
+    if (z.avail_in == 0) {
+      if (left <= 0) break;
+      in.read(input.data(), static_cast<std::streamsize>(std::min<double>(input.size(), left)));
+      const auto got = in.gcount();
+      if (got <= 0) break;
+      left -= double(got);
+      z.next_in = reinterpret_cast<Bytef*>(input.data());
+      z.avail_in = static_cast<uInt>(got);
+    }
+    z.next_out = reinterpret_cast<Bytef*>(output.data());
+    z.avail_out = static_cast<uInt>(output.size());
+    status = inflate(&z, Z_NO_FLUSH);
+    if (status != Z_OK && status != Z_STREAM_END) break;
+    total += double(output.size() - z.avail_out);
+  }
+  inflateEnd(&z);
+  return status == Z_STREAM_END ? total : -1;
+}
+
+// MetaImage: VTK's reader fills a short file's missing voxels with whatever it finds, so the data
+// size is checked against the header first (uncompressed data; compressed data is checked by zlib).
+}  // namespace
+
+// A text header's "key = value" (MetaImage) or "key: value" (NRRD) lines, up to the data: the
+// line ElementDataFile (MetaImage) or an empty line (NRRD). `end` is the header's size in bytes.
+std::map<std::string, std::string> text_header(const std::filesystem::path& path, char separator,
+                                               std::streamoff* end) {
+  std::ifstream in(path, std::ios::binary);
+  std::map<std::string, std::string> keys;
+  std::string line;
+  for (int n = 0; std::getline(in, line) && n < 1000; ++n) {
+    if (end) *end = in.tellg();
+    if (separator == ':' && trim(line).empty()) break;
+    if (!line.empty() && line[0] == '#') continue;
+    const auto at = line.find(separator);
+    if (at == std::string::npos) continue;
+    const std::string key = trim(line.substr(0, at)), value = trim(line.substr(at + 1 + (separator == ':' && line.compare(at, 2, ":=") == 0)));
+    keys[key] = value;
+    if (key == "ElementDataFile") break;  // MetaImage's last header line
+  }
+  return keys;
+}
+
+void check_metaimage_size(const std::filesystem::path& path) {
+  std::streamoff header = 0;
+  std::map<std::string, std::string> keys = text_header(path, '=', &header);
+  const auto get = [&](const std::string& key) { return keys.count(key) ? keys[key] : std::string(); };
+  std::istringstream dims(get("DimSize"));
+  double voxels = 1;
+  int n = 0;
+  for (double d; dims >> d; ++n) voxels *= d;
+  if (n == 0) throw std::runtime_error(path.string() + ": the header has no DimSize");
+  static const std::map<std::string, int> bytes{{"MET_UCHAR", 1}, {"MET_CHAR", 1},   {"MET_USHORT", 2}, {"MET_SHORT", 2},
+                                                {"MET_UINT", 4},  {"MET_INT", 4},    {"MET_FLOAT", 4},  {"MET_DOUBLE", 8},
+                                                {"MET_ULONG", 8}, {"MET_LONG", 8}};
+  const auto type = bytes.find(get("ElementType"));
+  if (type == bytes.end()) throw std::runtime_error(path.string() + ": unknown ElementType '" + get("ElementType") + "'");
+  const std::string channels = get("ElementNumberOfChannels");
+  const double expected = voxels * type->second * (channels.empty() ? 1 : std::stod(channels));
+  const std::string data = get("ElementDataFile");
+  double available = 0;
+  if (data == "LOCAL") {
+    available = double(std::filesystem::file_size(path)) - double(header);
+  } else {
+    const auto file = path.parent_path() / data;
+    if (!std::filesystem::is_regular_file(file))
+      throw std::runtime_error(path.string() + ": its data file " + file.string() + " is missing");
+    available = double(std::filesystem::file_size(file));
+  }
+  const std::string compressed = get("CompressedData");
+  if (compressed == "True" || compressed == "true") {
+    // Compressed: inflated, the data must give exactly what the header says (VTK's reader would
+    // leave the voxels of a cut-short stream as it found them).
+    std::ifstream data_in(data == "LOCAL" ? path : path.parent_path() / data, std::ios::binary);
+    if (data == "LOCAL") data_in.seekg(header);
+    const double inflated = inflated_size(data_in, available, false);
+    if (inflated < 0)
+      throw std::runtime_error(path.string() + ": its compressed data is cut short or corrupt (zlib could not inflate it)");
+    available = inflated;
+  }
+  if (available < expected)
+    throw std::runtime_error(path.string() + ": DimSize " + get("DimSize") + " of " + get("ElementType") + " needs " +
+                             std::to_string(static_cast<long long>(expected)) + " bytes but the file holds " +
+                             std::to_string(static_cast<long long>(available)));
+}
+
+// NRRD: the same check for raw and gzip-encoded data, inline or in a detached file.
+void check_nrrd_size(const std::filesystem::path& path) {
+  std::streamoff header = 0;
+  auto keys = text_header(path, ':', &header);
+  static const std::map<std::string, int> bytes{
+      {"uchar", 1},  {"unsigned char", 1}, {"uint8", 1},  {"uint8_t", 1},  {"signed char", 1}, {"int8", 1},
+      {"char", 1},   {"short", 2},         {"ushort", 2}, {"unsigned short", 2}, {"int16", 2}, {"uint16", 2},
+      {"int", 4},    {"uint", 4},          {"unsigned int", 4}, {"int32", 4}, {"uint32", 4}, {"float", 4},
+      {"double", 8}, {"longlong", 8},      {"int64", 8},  {"uint64", 8}};
+  const auto type = bytes.find(keys["type"]);
+  if (type == bytes.end()) throw std::runtime_error(path.string() + ": unknown NRRD type '" + keys["type"] + "'");
+  std::istringstream sizes(keys["sizes"]);
+  double expected = type->second;
+  int n = 0;
+  for (double d; sizes >> d; ++n) expected *= d;
+  if (n == 0) throw std::runtime_error(path.string() + ": the header has no sizes");
+  const std::string encoding = keys["encoding"];
+  const std::string detached = keys.count("data file") ? keys["data file"] : keys["datafile"];
+  const std::filesystem::path file = detached.empty() ? path : path.parent_path() / detached;
+  if (!std::filesystem::is_regular_file(file))
+    throw std::runtime_error(path.string() + ": its data file " + file.string() + " is missing");
+  double available = double(std::filesystem::file_size(file)) - (detached.empty() ? double(header) : 0);
+  if (encoding == "gzip" || encoding == "gz") {
+    std::ifstream in(file, std::ios::binary);
+    if (detached.empty()) in.seekg(header);
+    available = inflated_size(in, available, true);
+    if (available < 0) throw std::runtime_error(path.string() + ": its gzip data is cut short or corrupt");
+  } else if (encoding != "raw") {
+    return;  // text encodings: VTK's reader checks as it parses
+  }
+  if (available < expected)
+    throw std::runtime_error(path.string() + ": sizes " + keys["sizes"] + " of " + keys["type"] + " need " +
+                             std::to_string(static_cast<long long>(expected)) + " bytes but the data holds " +
+                             std::to_string(static_cast<long long>(available)));
+}
+
+}  // namespace fetouch::imaging
