@@ -135,26 +135,40 @@ StepReport NewtonDriver::newton(double lambda, const NewtonSettings& s, double r
       return report;
     }
     for (Term* term : terms_) term->complete_step(system_, du);
-    // Backtracking: halve until the residual decreases and no term rejects the state. The full step
-    // is assembled with its tangent, which the next iteration then reuses (one assembly per Newton
-    // iteration when the full step is taken, as it is near convergence). Without the line search the
-    // full step is taken whatever its residual.
+    // The line search. With an energy (every term conservative) and du a descent direction for it,
+    // it follows the energy's slope along the step, g(a) = r(u + a du) . du (Bonet & Wood, Nonlinear
+    // Continuum Mechanics for Finite Element Analysis, 2nd ed., section 9.5.3): the full step stands
+    // unless it overshoots the energy's minimum along du so that g(1) < -g(0) / 2; then a takes the
+    // secant's root. The residual's norm is no merit function here: a good step from rest often
+    // raises it tenfold, and halving until it falls costs a dozen iterations a load step. Otherwise
+    // (a cavity's constraint) it halves until the residual's norm decreases. Any step is halved
+    // while it inverts an element. The full step is assembled with its tangent, which the next
+    // iteration then reuses (one assembly per Newton iteration when the full step is taken).
+    // Without the line search the full step is taken whatever its residual.
     const Vector<double> start = u_;
     const std::vector<double> start_unknowns = unknowns();
+    const double slope = r * du;
+    const bool energy = s.line_search && slope > 0 && conservative_;
     double alpha = 1;
     bool accepted = false;
     const int tries = s.line_search ? 10 : 1;
-    for (int b = 0; b < tries && !accepted; ++b, alpha /= 2) {
+    for (int b = 0; b < tries && !accepted; ++b) {
       u_ = start;
       u_.add(alpha, du);
       for (Term* term : terms_) term->take_step(alpha);
       const bool full = b == 0;
-      if (!assemble(lambda, trial_r, /*tangent=*/full)) continue;
-      accepted = !s.line_search || trial_r.l2_norm() < (1 - 1e-4 * alpha) * norm || b == tries - 1;
+      if (!assemble(lambda, trial_r, /*tangent=*/full)) {
+        alpha /= 2;
+        continue;
+      }
+      const double trial_slope = energy ? trial_r * du : 0;
+      accepted = !s.line_search || b == tries - 1 ||
+                 (energy ? trial_slope >= -0.5 * slope : trial_r.l2_norm() < (1 - 1e-4 * alpha) * norm);
       if (accepted && full) {
         r.swap(trial_r);
         assembled = true;
       }
+      if (!accepted) alpha = energy ? std::max(0.1 * alpha, alpha * slope / (slope - trial_slope)) : alpha / 2;
     }
     if (!accepted) {
       u_ = start;
@@ -166,6 +180,23 @@ StepReport NewtonDriver::newton(double lambda, const NewtonSettings& s, double r
   report.iterations = s.max_iterations;
   report.failure = "no convergence in " + std::to_string(s.max_iterations) + " Newton iterations";
   return report;
+}
+
+// u (converged at load factor `at`) moved to the Lagrange polynomial through the path's states and
+// u at `at`, evaluated at `target`.
+void NewtonDriver::extrapolate_path(const std::vector<std::pair<double, Vector<double>>>& path, double at,
+                                    double target) {
+  std::vector<double> factors;
+  for (const auto& p : path) factors.push_back(p.first);
+  factors.push_back(at);
+  const auto weight = [&](std::size_t i) {
+    double w = 1;
+    for (std::size_t j = 0; j < factors.size(); ++j)
+      if (j != i) w *= (target - factors[j]) / (factors[i] - factors[j]);
+    return w;
+  };
+  u_ *= weight(factors.size() - 1);
+  for (std::size_t i = 0; i < path.size(); ++i) u_.add(weight(i), path[i].second);
 }
 
 SolveReport NewtonDriver::solve(const NewtonSettings& s, const Predictor& predictor, const HandoverError& handover_error) {
@@ -188,26 +219,42 @@ SolveReport NewtonDriver::solve(const NewtonSettings& s, const Predictor& predic
   };
   double done = 0, increment = 1.0 / std::max(1, s.load_steps);
   bool predict = static_cast<bool>(predictor);
+  // From the second load step on, each starts from the last converged states extrapolated to the
+  // new load factor (secant from two, quadratic from three, as CalculiX extrapolates): Newton begins
+  // near the answer. Its tolerance stays relative to the load increment's out-of-balance force,
+  // estimated from the first step's (dead loads scale with the factor), not to the smaller residual
+  // the extrapolation leaves.
+  std::vector<std::pair<double, Vector<double>>> path;  // (load factor, converged u), newest last
+  double reference_per_load = -1;
+  bool extrapolate = true;
   while (done < 1 - 1e-12) {
     const double target = std::min(1.0, done + increment);
     const Vector<double> last_good = u_;
     const std::vector<double> last_good_unknowns = unknowns();
-    const double reference = predict ? predictor(u_) : -1;
+    const bool extrapolated = extrapolate && !predict && !path.empty() && reference_per_load > 0;
+    if (extrapolated) extrapolate_path(path, done, target);
+    const double reference = predict ? predictor(u_) : extrapolated ? reference_per_load * (target - done) : -1;
     StepReport step = newton(target, s, reference, handover_error, frame && s.load_steps <= 1);
     report.carried = report.carried || step.carried;
     report.total_iterations += static_cast<int>(step.residuals.size()) - 1;
     const bool ok = step.converged;
+    if (ok && !predict && reference_per_load < 0 && !step.residuals.empty())
+      reference_per_load = step.residuals.front() / (target - done);
     report.steps.push_back(step);
     if (ok) {
+      if (path.size() == 2) path.erase(path.begin());
+      path.emplace_back(done, last_good);
       done = target;
       predict = false;
+      extrapolate = true;
       continue;
     }
     u_ = last_good;  // roll back the step
     set_unknowns(last_good_unknowns);
     tangent_current_ = false;
-    if (predict) {  // retry the same step from the last converged state
+    if (predict || extrapolated) {  // retry the same step from the last converged state
       predict = false;
+      extrapolate = false;
       continue;
     }
     tangent.refactor_next();  // the retry starts from a state the factorisation may not fit

@@ -4,11 +4,16 @@
 // frame's state and loads: a warm start).
 //
 // Each iteration solves K du = r with the consistent tangent to a tolerance that shrinks with the
-// residual (inexact Newton), then a backtracking line search halves the step until the residual
-// decreases and no term rejects the state (an inverted element). A step whose Newton fails is rolled
-// back to the last converged state and retried with half the increment, down to a minimum; a solve
-// that fails altogether leaves the state it started from. It names no effect.
+// residual (inexact Newton), then a line search: when every term has an energy it scales a step that
+// overshoots the energy's minimum along it (its slope r.du), otherwise it halves the step until the
+// residual decreases; a step that inverts an element is halved either way (without the line search
+// it fails the load step). From the second load step on, Newton starts from the converged path
+// extrapolated to the new load factor. A step whose Newton fails is rolled back to the last converged state and retried (first without the extrapolation, then
+// with half the increment, down to a minimum); a solve that fails altogether leaves the state it
+// started from. It names no effect.
 #pragma once
+
+#include <algorithm>
 
 #include <deal.II/lac/vector.h>
 
@@ -71,7 +76,10 @@ class NewtonDriver {
  public:
   NewtonDriver(const Discretisation& discretisation, LinearSystem& system, const std::vector<Support>& supports,
                dealii::Vector<double>& u);
-  void set_terms(std::vector<Term*> terms) { terms_ = std::move(terms); }
+  void set_terms(std::vector<Term*> terms) {
+    terms_ = std::move(terms);
+    conservative_ = std::all_of(terms_.begin(), terms_.end(), [](const Term* t) { return t->conservative(); });
+  }
   const std::vector<Term*>& terms() const { return terms_; }
 
   // r = f_ext - f_int at load factor lambda (constrained entries zero) and, with `tangent`, K;
@@ -113,7 +121,10 @@ class NewtonDriver {
   LinearSystem& system_;
   const std::vector<Support>& supports_;
   dealii::Vector<double>& u_;
+  void extrapolate_path(const std::vector<std::pair<double, dealii::Vector<double>>>& path, double at,
+                        double target);
   std::vector<Term*> terms_;
+  bool conservative_ = true;  // every term has an energy: the line search follows it
   bool tangent_current_ = false;
   bool tangent_assembled_ = false;  // the matrix holds the tangent of some recent state
   double static_done_ = 0;

@@ -57,6 +57,9 @@ class Term {
   virtual void take_step(double /*alpha*/) {}
   // The term's own equation holds (a cavity's volume law), beside the residual's norm.
   virtual bool satisfied() const { return true; }
+  // The term's residual is minus the gradient of an energy of u alone (hyperelasticity, dead loads,
+  // an implicit time step's incremental potential): the line search may then follow that energy.
+  virtual bool conservative() const { return true; }
 };
 
 }  // namespace fetouch::fem
