@@ -7,6 +7,8 @@
 // defaults); policy:1 at the scene's default accuracy policy (contacts within 10 um, 1 mN out of
 // balance, W to 1e-3, at most 4 Newton iterations a frame). Serial, or under mpirun -np 2 (a fixed
 // 60 frames per case).
+// Assembly: one residual and tangent assembly of the same block, on 1 or 2 threads (nothing else
+// running: the frame's background factorisation shares the second core).
 //   build/release/bench/bench_fem --benchmark_filter=Frame
 #include <benchmark/benchmark.h>
 #include <deal.II/grid/grid_generator.h>
@@ -29,15 +31,20 @@ namespace {
 
 using namespace fetouch::fem;
 
-void BM_FemFrame(benchmark::State& state) {
-  const int degree = static_cast<int>(state.range(0));
-  const unsigned int n = static_cast<unsigned int>(state.range(1));
-  dealii::Triangulation<3> tria;
+// The 10 x 8 x 5 cm block, (n + 2) x (n + 1) x n hexahedra each split into tetrahedra; base id 4.
+void block(dealii::Triangulation<3>& tria, unsigned int n) {
   dealii::GridGenerator::subdivided_hyper_rectangle_with_simplices(tria, {n + 2, n + 1, n}, dealii::Point<3>(),
                                                                    dealii::Point<3>(0.1, 0.08, 0.05));
   for (const auto& cell : tria.active_cell_iterators())
     for (const unsigned int f : cell->face_indices())
       if (cell->face(f)->at_boundary()) cell->face(f)->set_boundary_id(std::abs(cell->face(f)->center()[2]) < 1e-12 ? 4 : 1);
+}
+
+void BM_FemFrame(benchmark::State& state) {
+  const int degree = static_cast<int>(state.range(0));
+  const unsigned int n = static_cast<unsigned int>(state.range(1));
+  dealii::Triangulation<3> tria;
+  block(tria, n);
   const NeoHookean material(lame_lambda(5000, 0.45), lame_mu(5000, 0.45));
   QuasiStaticSolver solver(tria, material, degree);
   solver.use_algebraic_multigrid(state.range(2) != 0);
@@ -98,6 +105,21 @@ void BM_FemFrame(benchmark::State& state) {
   state.counters["solves_ms"] = 1e3 * solves / frames;
   state.counters["compliance_ms"] = 1e3 * compliance_s / frames;
 }
+void BM_FemAssembly(benchmark::State& state) {
+  const int degree = static_cast<int>(state.range(0));
+  const unsigned int n = static_cast<unsigned int>(state.range(1));
+  dealii::Triangulation<3> tria;
+  block(tria, n);
+  const NeoHookean material(lame_lambda(5000, 0.45), lame_mu(5000, 0.45));
+  QuasiStaticSolver solver(tria, material, degree);
+  solver.set_assembly_threads(static_cast<unsigned int>(state.range(2)));
+  solver.prescribe_displacement(4, {true, true, true}, dealii::Tensor<1, 3>());
+  NewtonSettings once;  // a solve that stops at its first assembly (residual and tangent)
+  once.absolute_tolerance = 1e30;
+  solver.solve(once);
+  for (auto _ : state) state.SetIterationTime(solver.solve(once).assembly_s);
+  state.counters["dofs"] = solver.dofs();
+}
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -113,6 +135,12 @@ int main(int argc, char** argv) {
       for (const int n : {6, 10, 13, 14, 16, 18, 20}) frames->Args({1, n, amg, policy});
       for (const int n : {3, 5, 6, 7, 9}) frames->Args({2, n, amg, policy});
     }
+  auto* assembly = benchmark::RegisterBenchmark("BM_FemAssembly", BM_FemAssembly);
+  assembly->ArgNames({"degree", "n", "threads"})->Unit(benchmark::kMillisecond)->UseManualTime();
+  for (const int threads : {1, 2}) {
+    for (const int n : {10, 14, 20}) assembly->Args({1, n, threads});
+    for (const int n : {5, 9}) assembly->Args({2, n, threads});
+  }
   if (ranks > 1) frames->Iterations(60);
   benchmark::Initialize(&argc, argv);
   benchmark::RunSpecifiedBenchmarks();

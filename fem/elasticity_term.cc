@@ -2,6 +2,7 @@
 
 #include <deal.II/lac/full_matrix.h>
 
+#include <algorithm>
 #include <array>
 #include <stdexcept>
 #include <thread>
@@ -48,9 +49,9 @@ const Material& ElasticityTerm::material_of(unsigned int cell) const {
   return *cell_material_[cell];
 }
 
-// Cells my_cells[begin, end) add -f_int into r (free dofs), f_int into `internal` (if given) and, if
+// The cells add -f_int into r (free dofs), f_int into `internal` (if given) and, if
 // `values`, the tangent into that value array. False if J <= 0 somewhere.
-bool ElasticityTerm::assemble_cells(unsigned int begin, unsigned int end, const Vector<double>& u, double* r,
+bool ElasticityTerm::assemble_cells(const std::vector<unsigned int>& cells, const Vector<double>& u, double* r,
                                     double* internal, double* values, const LinearSystem& system) const {
   const Discretisation::Cells& c = d_.cells();
   const std::vector<bool>& constrained = system.constrained();
@@ -64,8 +65,7 @@ bool ElasticityTerm::assemble_cells(unsigned int begin, unsigned int end, const 
   std::vector<Tensor2> F_at(nq);
   Tensor2 P;
   Tensor4 A;
-  for (unsigned int kk = begin; kk < end; ++kk) {
-    const unsigned int k = d_.my_cells[kk];
+  for (const unsigned int k : cells) {
     const types::global_dof_index* indices = &c.indices[std::size_t(k) * n];
     const Material& material = material_of(k);
     d_.gather(k, u, u_local.data());
@@ -147,32 +147,56 @@ bool ElasticityTerm::assemble_cells(unsigned int begin, unsigned int end, const 
   return true;
 }
 
+void ElasticityTerm::plan_threads() const {
+  plan_ = {};
+  const std::vector<unsigned int>& mine = d_.my_cells;
+  if (threads_ < 2 || d_.ranks > 1 || mine.size() < 2 * kCellsPerThread) {
+    plan_[0] = mine;
+    return;
+  }
+  // Cut at the median of the cell centres along the mesh's longest extent.
+  std::vector<Point<3>> centre(d_.n_cells());
+  {
+    unsigned int k = 0;
+    for (const auto& cell : d_.tria.active_cell_iterators()) centre[k++] = cell->center();
+  }
+  Point<3> low = centre[mine[0]], high = low;
+  for (const unsigned int k : mine)
+    for (int a = 0; a < 3; ++a) low[a] = std::min(low[a], centre[k][a]), high[a] = std::max(high[a], centre[k][a]);
+  int axis = 0;
+  for (int a = 1; a < 3; ++a)
+    if (high[a] - low[a] > high[axis] - low[axis]) axis = a;
+  std::vector<unsigned int> order = mine;
+  const auto below = [&](unsigned int x, unsigned int y) {
+    return centre[x][axis] < centre[y][axis] || (centre[x][axis] == centre[y][axis] && x < y);
+  };
+  std::nth_element(order.begin(), order.begin() + order.size() / 2, order.end(), below);
+  std::vector<unsigned char> side(d_.n_cells(), 0), touched(d_.n_dofs(), 0);
+  for (std::size_t i = 0; i < order.size(); ++i) side[order[i]] = i < order.size() / 2 ? 1 : 2;
+  const Discretisation::Cells& c = d_.cells();
+  for (const unsigned int k : mine)
+    for (unsigned int i = 0; i < c.n; ++i) touched[c.indices[std::size_t(k) * c.n + i]] |= side[k];
+  for (const unsigned int k : mine) {  // in cell order, as one thread would take them
+    bool shared = false;
+    for (unsigned int i = 0; i < c.n && !shared; ++i) shared = touched[c.indices[std::size_t(k) * c.n + i]] == 3;
+    plan_[shared ? 2 : side[k] - 1].push_back(k);
+  }
+}
+
 bool ElasticityTerm::assemble(const AssemblyState& state, AssemblyTarget& target) {
   const LinearSystem& system = *target.system;
-  const unsigned int cells = static_cast<unsigned int>(d_.my_cells.size());
-  material_of(0);                                // per-cell materials and the scatter map are built
-  if (target.tangent) system.cell_scatter(0);    // before the threads read them
-  if (cells < 2 * kCellsPerThread || d_.ranks > 1)  // in parallel the ranks take the cores
-    return assemble_cells(0, cells, state.u, target.residual, target.internal, target.tangent, system);
-  const unsigned int half = cells / 2;
-  const std::size_t dofs = state.u.size();
-  second_.r.assign(dofs, 0.0);
-  if (target.internal) second_.internal.assign(dofs, 0.0);
-  if (target.tangent) second_.values.assign(system.tangent().nonzeros(), 0.0);
+  material_of(0);                                // per-cell materials, the scatter map and the
+  if (target.tangent) system.cell_scatter(0);    // threads' cells are built before the threads run
+  if (plan_[0].empty() && !d_.my_cells.empty()) plan_threads();
+  const auto run = [&](const std::vector<unsigned int>& cells) {
+    return assemble_cells(cells, state.u, target.residual, target.internal, target.tangent, system);
+  };
+  if (plan_[1].empty()) return run(plan_[0]);
   bool second_ok = true;
-  std::thread worker([&] {
-    second_ok = assemble_cells(half, cells, state.u, second_.r.data(), target.internal ? second_.internal.data() : nullptr,
-                               target.tangent ? second_.values.data() : nullptr, system);
-  });
-  const bool first_ok = assemble_cells(0, half, state.u, target.residual, target.internal, target.tangent, system);
+  std::thread worker([&] { second_ok = run(plan_[1]); });
+  const bool first_ok = run(plan_[0]);
   worker.join();
-  if (!(first_ok && second_ok)) return false;
-  for (std::size_t i = 0; i < dofs; ++i) target.residual[i] += second_.r[i];
-  if (target.internal)
-    for (std::size_t i = 0; i < dofs; ++i) target.internal[i] += second_.internal[i];
-  if (target.tangent)
-    for (std::size_t i = 0; i < second_.values.size(); ++i) target.tangent[i] += second_.values[i];
-  return true;
+  return first_ok && second_ok && run(plan_[2]);
 }
 
 }  // namespace fetouch::fem

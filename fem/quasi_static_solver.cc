@@ -52,6 +52,8 @@ void QuasiStaticSolver::use_algebraic_multigrid(bool on) {
   impl_->set_up = false;
 }
 
+void QuasiStaticSolver::set_assembly_threads(unsigned int threads) { impl_->elasticity.set_threads(threads); }
+
 // ---- supports and loads -------------------------------------------------------------------------
 
 void QuasiStaticSolver::prescribe_displacement(unsigned int boundary_id, std::array<bool, 3> components,

@@ -52,6 +52,8 @@ class QuasiStaticSolver {
   // Linear solves by CG with algebraic multigrid (GAMG, rigid-body near-null space) instead of CG
   // on a stale sparse Cholesky factorisation: for meshes too large to factorise.
   void use_algebraic_multigrid(bool on);
+  // Threads assembling the elasticity (1 or 2, the default; elasticity_term.h).
+  void set_assembly_threads(unsigned int threads);
   // Whether a background factorisation is taken up at a fixed frame (true: reproducible, the
   // default, and what replays use in both clocks, so that real time equals lockstep up to the first
   // late answer) or as soon as it is ready. tangent_system.h.
