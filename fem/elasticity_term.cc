@@ -149,6 +149,7 @@ bool ElasticityTerm::assemble_cells(const std::vector<unsigned int>& cells, cons
 
 void ElasticityTerm::plan_threads() const {
   plan_ = {};
+  planned_ = true;
   const std::vector<unsigned int>& mine = d_.my_cells;
   if (threads_ < 2 || d_.ranks > 1 || mine.size() < 2 * kCellsPerThread) {
     plan_[0] = mine;
@@ -187,7 +188,7 @@ bool ElasticityTerm::assemble(const AssemblyState& state, AssemblyTarget& target
   const LinearSystem& system = *target.system;
   material_of(0);                                // per-cell materials, the scatter map and the
   if (target.tangent) system.cell_scatter(0);    // threads' cells are built before the threads run
-  if (plan_[0].empty() && !d_.my_cells.empty()) plan_threads();
+  if (!planned_) plan_threads();
   const auto run = [&](const std::vector<unsigned int>& cells) {
     return assemble_cells(cells, state.u, target.residual, target.internal, target.tangent, system);
   };

@@ -42,7 +42,7 @@ class ElasticityTerm final : public Term {
   // cores) and below 2 kCellsPerThread cells.
   void set_threads(unsigned int threads) {
     threads_ = threads;
-    plan_ = {};
+    planned_ = false;
   }
   static constexpr unsigned int kCellsPerThread = 1000;
 
@@ -59,6 +59,7 @@ class ElasticityTerm final : public Term {
   // The first thread's cells, the second's, and those along the cut (after both); the first holds
   // every cell when one thread assembles. Built on first use.
   mutable std::array<std::vector<unsigned int>, 3> plan_;
+  mutable bool planned_ = false;
 };
 
 // Throws std::invalid_argument naming the material if it is not decoupled.

@@ -229,7 +229,7 @@ SolveReport NewtonDriver::solve(const NewtonSettings& s, const Predictor& predic
   bool extrapolate = true;
   while (done < 1 - 1e-12) {
     const double target = std::min(1.0, done + increment);
-    const Vector<double> last_good = u_;
+    Vector<double> last_good = u_;
     const std::vector<double> last_good_unknowns = unknowns();
     const bool extrapolated = extrapolate && !predict && !path.empty() && reference_per_load > 0;
     if (extrapolated) extrapolate_path(path, done, target);
@@ -243,7 +243,7 @@ SolveReport NewtonDriver::solve(const NewtonSettings& s, const Predictor& predic
     report.steps.push_back(step);
     if (ok) {
       if (path.size() == 2) path.erase(path.begin());
-      path.emplace_back(done, last_good);
+      path.emplace_back(done, std::move(last_good));
       done = target;
       predict = false;
       extrapolate = true;
