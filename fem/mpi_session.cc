@@ -16,6 +16,13 @@ struct MpiSession::Mpi {
 MpiSession::MpiSession(int& argc, char**& argv) {
   // Only for singletons: under mpirun the launcher's session directory is the one to use.
   const bool launched = std::getenv("OMPI_COMM_WORLD_SIZE") != nullptr || std::getenv("PMIX_RANK") != nullptr;
+  if (!launched) {
+    // A singleton has no peers: without these, Open MPI 4 starts an `orted` daemon (0.2 s) and
+    // loads the InfiniBand/Omni-Path transports (0.1 s each) before the first line of work. The
+    // caller's own settings win (setenv without overwrite).
+    setenv("OMPI_MCA_ess_singleton_isolated", "1", 0);
+    setenv("OMPI_MCA_pml", "ob1", 0);
+  }
   if (!launched && !std::getenv("OMPI_MCA_orte_tmpdir_base")) {
     directory_ = std::filesystem::temp_directory_path() / ("fetouch_mpi_" + std::to_string(::getpid()));
     std::filesystem::create_directories(directory_);
