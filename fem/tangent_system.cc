@@ -145,6 +145,10 @@ void TangentSystem::create_solver(const char* type) {
   check(KSPGetPC(p.ksp, &p.pc), "getting the preconditioner");
   if (method_ == Method::amg) {
     check(PCSetType(p.pc, PCGAMG), "choosing algebraic multigrid");
+    // Plain (unsmoothed) aggregation: sparser coarse operators, so a set-up and a V-cycle cost about
+    // half as much, for 1.7x the CG iterations. Measured on bench_fem's block at 10,080 DOFs: a
+    // frame 8.96 -> 6.33 ms mean, 120 -> 50 ms slowest. PETSC_OPTIONS (-pc_gamg_agg_nsmooths) overrides.
+    check(PCGAMGSetNSmooths(p.pc, 0), "choosing plain aggregation");
     if (near_null_vectors_ > 0) {
       // The rigid-body modes (orthonormal, as PETSc requires) as GAMG's near-null space.
       const int local = owned_end_ - owned_begin_;
