@@ -5,6 +5,9 @@
 
 #include <pthread.h>
 #include <sched.h>
+#include <sys/resource.h>
+#include <sys/syscall.h>
+#include <unistd.h>
 
 #include <condition_variable>
 #include <memory>
@@ -27,6 +30,9 @@ struct TangentSystem::Worker {
   bool requested = false, done = false, ok = false, stop = false;
   cpu_set_t affinity{};  // the requesting thread's cores: the worker runs where the solver may
   bool pinned = false;
+  // Real time (frames taken up when ready): the worker yields the core it shares with the solver
+  // to the frames, which have a deadline, and factorises in the time they leave (nice 19).
+  int nice = 0, applied_nice = 0;
   std::thread thread;
 
   Worker(int n, const int* row_start, const int* columns)
@@ -46,6 +52,10 @@ struct TangentSystem::Worker {
       cv.wait(lock, [this] { return stop || (requested && !done); });
       if (stop) return;
       if (pinned) pthread_setaffinity_np(pthread_self(), sizeof affinity, &affinity);
+      if (nice != applied_nice) {
+        setpriority(PRIO_PROCESS, static_cast<id_t>(syscall(SYS_gettid)), nice);
+        applied_nice = nice;
+      }
       lock.unlock();
       const bool success = factor->factorise(values.data());
       lock.lock();

@@ -55,8 +55,8 @@ class QuasiStaticSolver {
   // Threads assembling the elasticity (1 or 2, the default; elasticity_term.h).
   void set_assembly_threads(unsigned int threads);
   // Whether a background factorisation is taken up at a fixed frame (true: reproducible, the
-  // default, and what replays use in both clocks, so that real time equals lockstep up to the first
-  // late answer) or as soon as it is ready. tangent_system.h.
+  // default, and what lockstep replays use; real-time replays take it up when ready, and the worker
+  // then yields its core to the frames) or as soon as it is ready. tangent_system.h.
   void set_deterministic_factorisations(bool on);
   QuasiStaticSolver(QuasiStaticSolver&&) noexcept;
   QuasiStaticSolver& operator=(QuasiStaticSolver&&) noexcept;

@@ -90,6 +90,7 @@ void TangentSystem::request_background() {
     worker_->cv.wait(lock, [this] { return !worker_->requested || worker_->done; });  // the warm-up
     worker_->values = values_;
     worker_->pinned = pthread_getaffinity_np(pthread_self(), sizeof worker_->affinity, &worker_->affinity) == 0;
+    worker_->nice = deterministic_ ? 0 : 19;
     worker_->requested = true;
     worker_->done = false;
   }

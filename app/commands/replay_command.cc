@@ -3,6 +3,7 @@
 // tissue in lockstep (app/session.h), recorded to HDF5 with a summary.
 #include <CLI/CLI.hpp>
 #include <mpi.h>
+#include <sched.h>
 
 #include <chrono>
 #include <filesystem>
@@ -371,6 +372,17 @@ SessionSummary run_session(const config::Scene& scene, const ReplayOptions& o, c
     };
   }
   const bool realtime = out && o.clock == "realtime";  // the comparison runs are lockstep
+  if (realtime && !distributed) {
+    // The solver's share of the machine in real time: every core but the haptic thread's. On one
+    // core a second assembly thread only takes turns with the first and the factorisation worker,
+    // and a frame must not wait for that worker: it takes the new factorisation up when it is ready.
+    cpu_set_t allowed;
+    CPU_ZERO(&allowed);
+    const int cores = sched_getaffinity(0, sizeof allowed, &allowed) == 0 ? CPU_COUNT(&allowed) : 1;
+    const int solver_cores = session.pin_haptic_core ? std::max(1, cores - 1) : cores;
+    environment.solver().set_assembly_threads(solver_cores >= 2 ? 2 : 1);
+    environment.solver().set_deterministic_factorisations(false);
+  }
   log::info() << "replaying " << scene.probes.size() << " probe(s) " << (realtime ? "in real time" : "in lockstep")
               << ", N = " << settings.ratio << ", " << haptics::to_string(settings.local_model) << " with " << haptics::to_string(settings.hold)
               << (distributed ? ", the solver on " + std::to_string(environment.solver().ranks()) + " MPI ranks" : "");

@@ -177,14 +177,17 @@ TEST(ReplayCommand, ShippedTrajectoriesAreRegeneratedByTheirCommand) {
   EXPECT_GE(checked, 2);
 }
 
-// The real-time clock against lockstep on the block poke. Real time changes only when an answer is
-// taken up, never what is computed: an answer there at its frame's start is taken up exactly where
-// lockstep takes it up. So the force series are equal bit for bit up to the first late answer
-// (summary: first_late_tick; this scene solves in a few ms of its 50 ms frames, so normally there
-// is none). After a late answer (a loaded machine) the tolerance is 10 % RMS of the force: a late
-// answer is taken up one frame (50 ms) later, while the integrator pauses on the held surface;
-// the press moves the probe 8 mm in 0.5 s, so one frame of lag is 0.8 mm of the 8 mm indentation,
-// about 10 % of the force during the press, and nothing during the approach and the hold.
+// The real-time clock against lockstep on the block poke. Real time takes an answer up when it
+// arrives, and a background factorisation as soon as it is ready (lockstep: at a fixed frame), so
+// the preconditioner, and with it the converged state, may differ within the accuracy policy: each
+// answer's contact displacement is within 10 um of the exact one, two answers within 20 um of each
+// other, 0.25 % of the 8 mm press; allowed: 1 % of the peak force (the tissue stiffens under the
+// press) up to the first late answer (summary: first_late_tick; this scene solves in a few ms of its
+// 50 ms frames, so normally there is none). After a late answer (a loaded machine) the tolerance is
+// 10 % RMS of the force: a late answer is taken up one frame (50 ms) later, while the integrator
+// pauses on the held surface; the press moves the probe 8 mm in 0.5 s, so one frame of lag is 0.8 mm
+// of the 8 mm indentation, about 10 % of the force during the press, and nothing during the approach
+// and the hold.
 TEST(ReplayCommand, RealTimeRendersTheLockstepForces) {
   const fs::path dir = fs::temp_directory_path() / ("fetouch_replay_rt_" + std::to_string(::getpid()));
   fs::remove_all(dir);
@@ -211,14 +214,17 @@ TEST(ReplayCommand, RealTimeRendersTheLockstepForces) {
   ASSERT_EQ(a.size(), 3001u);
   ASSERT_EQ(b.size(), a.size());
   const std::size_t exact = first_late < 0 ? a.size() : static_cast<std::size_t>(first_late);
-  double difference2 = 0, force2 = 0;
+  double difference2 = 0, force2 = 0, early_peak = 0, peak_force = 0;
   for (std::size_t k = 0; k < a.size(); ++k) {
-    if (k < exact) ASSERT_EQ(std::memcmp(a[k].force.data(), b[k].force.data(), 3 * sizeof(double)), 0) << "tick " << k;
+    if (k < exact) early_peak = std::max(early_peak, (a[k].force - b[k].force).norm());
+    peak_force = std::max(peak_force, a[k].force.norm());
     ASSERT_EQ(a[k].position, b[k].position) << k;  // the replay device plays the same points
     difference2 += (a[k].force - b[k].force).squaredNorm();
     force2 += a[k].force.squaredNorm();
   }
   EXPECT_GT(force2, 0);
+  std::printf("before the first late answer: largest force difference %.3g N (%.3g of the peak)\n", early_peak, early_peak / peak_force);
+  EXPECT_LE(early_peak, 0.01 * peak_force);
   EXPECT_LE(std::sqrt(difference2 / force2), 0.10);
   fs::remove_all(dir);
 }
