@@ -98,9 +98,13 @@ void FemEnvironment::solve(const std::vector<haptics::ContactSample>& samples, l
   out.frame = frame;
   // FETOUCH_TRACE_FRAMES=1: where each frame's time went, one line per frame on standard error.
   static const bool trace = std::getenv("FETOUCH_TRACE_FRAMES") != nullptr;
-  if (trace)
-    std::fprintf(stderr, "frame %ld: %.1f ms; %s\n", frame, 1e3 * out.status.seconds,
-                 describe_frame(report, solver_->last_compliance_times()).c_str());
+  if (trace) {
+    std::string residuals;
+    for (const StepReport& step : report.steps)
+      for (const double r : step.residuals) residuals += (residuals.empty() ? "" : " ") + std::to_string(r);
+    std::fprintf(stderr, "frame %ld: %.1f ms; %s; patch moves %ld; residuals %s\n", frame, 1e3 * out.status.seconds,
+                 describe_frame(report, solver_->last_compliance_times()).c_str(), patch_moves_, residuals.c_str());
+  }
 
 }
 
