@@ -14,6 +14,7 @@
 
 #include <algorithm>
 #include <array>
+#include <cmath>
 #include <filesystem>
 #include <set>
 #include <stdexcept>
@@ -24,6 +25,17 @@ namespace fetouch::fem {
 using dealii::Point;
 
 namespace {
+
+// Corners of the cell types read here; 0 for any other type.
+int corners_of(int type) {
+  switch (type) {
+    case VTK_TETRA: return 4;
+    case VTK_HEXAHEDRON: return 8;
+    case VTK_TRIANGLE: return 3;
+    case VTK_QUAD: return 4;
+    default: return 0;
+  }
+}
 
 double signed_volume(const std::vector<Point<3>>& v, const std::vector<unsigned int>& c) {
   return ((v[c[1]] - v[c[0]]) * dealii::cross_product_3d(v[c[2]] - v[c[0]], v[c[3]] - v[c[0]])) / 6;
@@ -50,10 +62,18 @@ std::map<std::string, unsigned int> read_vtu_mesh(const std::string& path, deali
   for (vtkIdType i = 0; i < grid->GetNumberOfPoints(); ++i) {
     double x[3];
     grid->GetPoint(i, x);
+    if (!std::isfinite(x[0]) || !std::isfinite(x[1]) || !std::isfinite(x[2]))
+      throw std::runtime_error(path + ": point " + std::to_string(i) + " has a coordinate that is not a finite number");
     vertices[i] = Point<3>(x[0], x[1], x[2]);
   }
   vtkDataArray* material = grid->GetCellData()->GetArray("material_id");
   vtkDataArray* boundary = grid->GetCellData()->GetArray("boundary_id");
+  for (vtkDataArray* array : {material, boundary})
+    if (array && (array->GetNumberOfComponents() != 1 || array->GetNumberOfTuples() != grid->GetNumberOfCells()))
+      throw std::runtime_error(path + ": cell array " + array->GetName() + " has " +
+                               std::to_string(array->GetNumberOfTuples()) + " values of " +
+                               std::to_string(array->GetNumberOfComponents()) + " components; expected one value per cell (" +
+                               std::to_string(grid->GetNumberOfCells()) + ")");
 
   std::vector<dealii::CellData<3>> cells;
   dealii::SubCellData faces;
@@ -62,28 +82,50 @@ std::map<std::string, unsigned int> read_vtu_mesh(const std::string& path, deali
   auto ids = vtkSmartPointer<vtkIdList>::New();
   for (vtkIdType c = 0; c < grid->GetNumberOfCells(); ++c) {
     const int type = grid->GetCellType(c);
+    const int corners = corners_of(type);
+    if (corners == 0) continue;  // lines, vertices, ...: no part of a volume mesh
     grid->GetCellPoints(c, ids);
-    std::vector<unsigned int> v(ids->GetNumberOfIds());
-    for (vtkIdType k = 0; k < ids->GetNumberOfIds(); ++k) v[k] = static_cast<unsigned int>(ids->GetId(k));
+    // A file from elsewhere: the cell's point count and every index checked before any is used.
+    const std::string cell_name = "cell " + std::to_string(c) + " (VTK type " + std::to_string(type) + ")";
+    if (ids->GetNumberOfIds() != corners)
+      throw std::runtime_error(path + ": " + cell_name + " has " + std::to_string(ids->GetNumberOfIds()) +
+                               " points where its type has " + std::to_string(corners));
+    std::vector<unsigned int> v(corners);
+    for (int k = 0; k < corners; ++k) {
+      const vtkIdType id = ids->GetId(k);
+      if (id < 0 || id >= grid->GetNumberOfPoints())
+        throw std::runtime_error(path + ": " + cell_name + " refers to point " + std::to_string(id) + ", outside 0.." +
+                                 std::to_string(grid->GetNumberOfPoints() - 1));
+      v[k] = static_cast<unsigned int>(id);
+    }
+    if (std::set<unsigned int>(v.begin(), v.end()).size() != v.size())
+      throw std::runtime_error(path + ": " + cell_name + " uses the same point twice (a degenerate cell)");
     if (type == VTK_TETRA || type == VTK_HEXAHEDRON) {
       if (volume_type >= 0 && volume_type != type)
         throw std::runtime_error(path + ": mixed tetrahedra and hexahedra are not supported (cell " + std::to_string(c) + ")");
       volume_type = type;
       dealii::CellData<3> cell(type == VTK_TETRA ? 4 : 8);
       if (type == VTK_TETRA) {
-        if (signed_volume(vertices, v) < 0) std::swap(v[2], v[3]);
+        const double volume = signed_volume(vertices, v);
+        if (!(std::abs(volume) > 0))
+          throw std::runtime_error(path + ": " + cell_name + " is a flat tetrahedron (zero volume)");
+        if (volume < 0) std::swap(v[2], v[3]);
         cell.vertices = v;
       } else {  // VTK 0 1 2 3 go around the bottom; deal.II numbers lexicographically
         cell.vertices = {v[0], v[1], v[3], v[2], v[4], v[5], v[7], v[6]};
       }
-      cell.material_id = material ? static_cast<dealii::types::material_id>(material->GetTuple1(c)) : 0;
+      const double id = material ? material->GetTuple1(c) : 0;
+      if (!(id >= 0 && id <= 255) || id != std::floor(id))
+        throw std::runtime_error(path + ": material_id " + std::to_string(id) + " of " + cell_name +
+                                 " is not a whole number in 0..255");
+      cell.material_id = static_cast<dealii::types::material_id>(id);
       cells.push_back(cell);
     } else if (type == VTK_TRIANGLE || type == VTK_QUAD) {
       if (!boundary) continue;  // untagged surface cells carry no region
       const double id = boundary->GetTuple1(c);
-      if (id < 0 || id > 255)
-        throw std::runtime_error(path + ": boundary_id " + std::to_string(id) + " of cell " + std::to_string(c) +
-                                 " is outside 0..255");
+      if (!(id >= 0 && id <= 255) || id != std::floor(id))
+        throw std::runtime_error(path + ": boundary_id " + std::to_string(id) + " of " + cell_name +
+                                 " is not a whole number in 0..255");
       dealii::CellData<2> face(type == VTK_TRIANGLE ? 3 : 4);
       face.vertices = type == VTK_TRIANGLE ? v : std::vector<unsigned int>{v[0], v[1], v[3], v[2]};
       face.boundary_id = static_cast<dealii::types::boundary_id>(id);

@@ -23,6 +23,7 @@
 #include <filesystem>
 #include <fstream>
 #include <map>
+#include <vector>
 
 #include "fem/material.h"
 #include "fem/quasi_static_solver.h"
@@ -197,6 +198,53 @@ TEST(VtuMesh, BrokenFilesAreRefusedByName) {
     EXPECT_NE(std::string(e.what()).find("no tetrahedra or hexahedra"), std::string::npos) << e.what();
   }
   std::filesystem::remove(surface);
+}
+
+// Files that crashed the reader (issue 17): cells that point outside the point array or have the
+// wrong number of points for their type, and other nonsense, each refused naming the file and
+// the cell, before any of it is used.
+TEST(VtuMesh, CellsThatDoNotFitTheirPointsAreRefused) {
+  struct Case {
+    const char* name;
+    std::vector<vtkIdType> corners;  // of one tetrahedron in a 4-point grid
+    double x0;                       // the first point's x
+    double material;
+    const char* expected;
+  };
+  const std::vector<Case> cases = {
+      {"past_the_points", {0, 1, 2, 99}, 0, 0, "refers to point 99, outside 0..3"},
+      {"negative", {0, -1, 2, 3}, 0, 0, "refers to point -1"},
+      {"three_points", {0, 1, 2}, 0, 0, "has 3 points where its type has 4"},
+      {"repeated", {0, 1, 2, 2}, 0, 0, "uses the same point twice"},
+      {"not_a_number", {0, 1, 2, 3}, std::nan(""), 0, "point 0 has a coordinate that is not a finite number"},
+      {"flat", {0, 1, 2, 3}, 0.5, 0, "flat tetrahedron"},  // its four points in z = 0 (below)
+      {"material", {0, 1, 2, 3}, 0, 1e9, "material_id"},
+  };
+  for (const Case& c : cases) {
+    auto grid = vtkSmartPointer<vtkUnstructuredGrid>::New();
+    auto points = vtkSmartPointer<vtkPoints>::New();
+    points->SetDataTypeToDouble();
+    const bool flat = std::string(c.name) == "flat";
+    points->InsertNextPoint(c.x0, 0, 0), points->InsertNextPoint(1, 0, 0), points->InsertNextPoint(0, 1, 0);
+    points->InsertNextPoint(flat ? 0.5 : 0, flat ? 0.5 : 0, flat ? 0 : 1);  // flat: all four in z = 0
+    grid->SetPoints(points);
+    grid->InsertNextCell(VTK_TETRA, static_cast<vtkIdType>(c.corners.size()), c.corners.data());
+    auto material = vtkSmartPointer<vtkIntArray>::New();
+    material->SetName("material_id");
+    material->InsertNextValue(static_cast<int>(std::min(c.material, 2e9)));
+    grid->GetCellData()->AddArray(material);
+    const std::string file = write(grid, c.name);
+    dealii::Triangulation<3> tria;
+    try {
+      read_vtu_mesh(file, tria);
+      ADD_FAILURE() << c.name << ": accepted";
+    } catch (const std::runtime_error& e) {
+      const std::string what = e.what();
+      EXPECT_NE(what.find(file), std::string::npos) << c.name << ": " << what;
+      EXPECT_NE(what.find(c.expected), std::string::npos) << c.name << ": " << what;
+    }
+    std::filesystem::remove(file);
+  }
 }
 
 }  // namespace
