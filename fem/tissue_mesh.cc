@@ -11,6 +11,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <fstream>
 #include <limits>
 #include <stdexcept>
 
@@ -157,13 +158,34 @@ TissueMeshInfo build_tissue_mesh(const config::MeshSpec& spec, Triangulation<3>&
       }
       if (spec.path.extension() != ".msh")
         throw std::runtime_error(file + ": the solver reads Gmsh .msh and VTK .vtu meshes");
+      {
+        // Gmsh opens whatever it is given by its content: a file that is not a mesh would be run
+        // as a .geo script (which can call the shell). Only a mesh goes to Gmsh.
+        std::ifstream head(file);
+        std::string first;
+        std::getline(head, first);
+        if (first.rfind("$MeshFormat", 0) != 0)
+          throw std::runtime_error(file + ":1: not a Gmsh mesh (expected $MeshFormat on the first line)");
+      }
       dealii::GridIn<3> in;
       in.attach_triangulation(tria);
+      const auto unreadable = [&file](const std::string& why) {
+        try {
+          gmsh::finalize();  // deal.II's reader initialised Gmsh and did not get to finalise it
+        } catch (...) {
+        }
+        return std::runtime_error(file + ": deal.II could not read it: " + why);
+      };
       try {
         in.read_msh(file);
       } catch (const std::exception& e) {
-        throw std::runtime_error(file + ": deal.II could not read it: " + short_message(e));
+        throw unreadable(short_message(e));
+      } catch (const std::string& gmsh_error) {  // what Gmsh's API throws
+        throw unreadable(gmsh_error);
+      } catch (...) {
+        throw unreadable("Gmsh failed");
       }
+      if (tria.n_active_cells() == 0) throw std::runtime_error(file + ": the mesh has no volume cells");
       info.boundary_ids = gmsh_surface_groups(file);
       break;
     }

@@ -1,10 +1,14 @@
 // The deal.II mesh built from a scene's mesh specification, checked against geometry: volumes,
-// face areas of named boundary regions, and a hand-written Gmsh file.
+// face areas of named boundary regions, and a hand-written Gmsh file; broken Gmsh files refused.
 #include <gtest/gtest.h>
 
 #include <deal.II/grid/tria.h>
+#include <unistd.h>
 
 #include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <vector>
 
 #include "fem/tissue_mesh_builder.h"
 
@@ -116,6 +120,50 @@ TEST(TissueMesh, ElementTypeMustSuitTheCells) {
   EXPECT_THROW(inspect_tissue_mesh(spec), std::runtime_error);
   spec.source = config::MeshSource::volume;
   EXPECT_THROW(inspect_tissue_mesh(spec), std::runtime_error);
+}
+
+// Broken Gmsh files reached `fetouch solve` and `replay` through deal.II's reader and aborted the
+// program (Gmsh throws std::string; issue 17). Each is refused naming the file and the reason, and a
+// file that is not a mesh never reaches Gmsh, which would run it as a .geo script: this one would
+// create a file through the shell.
+TEST(GmshFile, BrokenFilesAreRefusedAndNeverRunAsScripts) {
+  namespace fs = std::filesystem;
+  const fs::path dir = fs::temp_directory_path() / ("fetouch_broken_msh_" + std::to_string(::getpid()));
+  fs::create_directories(dir);
+  const fs::path marker = dir / "script_ran";
+  const std::vector<std::pair<std::string, std::string>> cases = {
+      {"SystemCall \"touch " + marker.string() + "\";\n", "not a Gmsh mesh"},
+      {"garbage\n", "not a Gmsh mesh"},
+      {"$MeshFormat\n9.9 0 8\n$EndMeshFormat\n", "9.9"},
+      {"$MeshFormat\n2.2 0 8\n$EndMeshFormat\n$Nodes\n3\n1 0 0 0\n$EndNodes\n", "could not read it"},
+      {"$MeshFormat\n2.2 0 8\n$EndMeshFormat\n$Nodes\n0\n$EndNodes\n$Elements\n1\n1 4 2 0 1 1 2 3 99\n$EndElements\n",
+       "could not read it"},
+      {"$MeshFormat\n2.2 0 8\n$EndMeshFormat\n", "could not read it"},
+  };
+  int k = 0;
+  for (const auto& [text, expected] : cases) {
+    config::MeshSpec spec;
+    spec.source = config::MeshSource::file;
+    spec.path = dir / ("broken_" + std::to_string(k++) + ".msh");
+    std::ofstream(spec.path) << text;
+    dealii::Triangulation<3> tria;
+    try {
+      build_tissue_mesh(spec, tria);
+      ADD_FAILURE() << text << ": accepted";
+    } catch (const std::runtime_error& e) {
+      const std::string what = e.what();
+      EXPECT_NE(what.find(spec.path.string()), std::string::npos) << what;
+      EXPECT_NE(what.find(expected), std::string::npos) << what;
+    }
+  }
+  EXPECT_FALSE(fs::exists(marker)) << "Gmsh ran a file given as a mesh";
+  // The good mesh still reads after all that (Gmsh left finalised).
+  config::MeshSpec good;
+  good.source = config::MeshSource::file;
+  good.path = fs::path(FETOUCH_TEST_DATA_DIR) / "data/unit_cube.msh";
+  dealii::Triangulation<3> tria;
+  EXPECT_EQ(build_tissue_mesh(good, tria).cells, 6u);
+  fs::remove_all(dir);
 }
 
 }  // namespace
