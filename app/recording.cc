@@ -225,15 +225,32 @@ long RecordingWriter::samples(int device) const {
 
 namespace {
 
-// A whole dataset (rows x columns) as doubles, integer values converted.
+// Rows a dataset may have: 10^8 samples are 28 hours at 1 kHz. A file that claims more is refused
+// before anything is allocated for it.
+constexpr hsize_t kMaxRows = 100'000'000;
+
+// A whole dataset (rows x columns) as doubles, integer values converted. Its shape is checked
+// against the documented layout (docs/replay.md) before anything is read: the read fills the
+// buffer with the dataset's whole extent, whatever its rank.
 std::vector<double> read_all(hid_t group, const std::string& name, hsize_t columns, const std::string& file) {
   const hid_t dataset = H5Dopen2(group, name.c_str(), H5P_DEFAULT);
   if (dataset < 0) throw std::runtime_error(file + ": no dataset " + name);
   H5Drefresh(dataset);  // the newest extent a writer has flushed
   const hid_t space = H5Dget_space(dataset);
-  hsize_t dims[2] = {0, 1};
-  H5Sget_simple_extent_dims(space, dims, nullptr);
-  H5Sclose(space);
+  const int rank = space < 0 ? -1 : H5Sget_simple_extent_ndims(space);
+  hsize_t dims[H5S_MAX_RANK] = {0};
+  if (rank >= 0) H5Sget_simple_extent_dims(space, dims, nullptr);
+  if (space >= 0) H5Sclose(space);
+  const int expected = columns > 1 ? 2 : 1;
+  if (rank != expected || (rank == 2 && dims[1] != columns) || dims[0] > kMaxRows) {
+    H5Dclose(dataset);
+    std::string shape = "(";
+    for (int k = 0; k < rank; ++k) shape += (k ? " x " : "") + std::to_string(dims[k]);
+    shape += rank < 0 ? "unreadable)" : ")";
+    throw std::runtime_error(file + ": dataset " + name + " has the shape " + shape + "; a recording has " +
+                             (expected == 1 ? std::string("one value per row") : std::to_string(columns) + " per row") +
+                             (dims[0] > kMaxRows ? " and at most 10^8 rows" : "") + " (docs/replay.md)");
+  }
   std::vector<double> values(static_cast<std::size_t>(dims[0] * columns));
   const herr_t status = values.empty() ? 0 : H5Dread(dataset, H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, values.data());
   H5Dclose(dataset);

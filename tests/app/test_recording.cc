@@ -2,6 +2,7 @@
 // being written, and left by a process killed with SIGKILL, which must reopen with every sample up
 // to at most one second before the kill (the writer flushes twice a second, as the I/O thread does).
 #include <gtest/gtest.h>
+#include <hdf5.h>
 #include <signal.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -11,6 +12,7 @@
 #include <filesystem>
 #include <fstream>
 #include <thread>
+#include <vector>
 
 #include "app/recording.h"
 
@@ -154,6 +156,61 @@ TEST(Recording, NotARecordingIsAnError) {
   EXPECT_THROW(read_recording(path), std::runtime_error);
   EXPECT_THROW(read_recording(scratch("absent")), std::runtime_error);
   fs::remove(path);
+}
+
+// Recordings whose datasets have other shapes than the documented layout corrupted the heap when
+// read (the read fills the buffer with the dataset's whole extent; issue 17). Each is refused,
+// naming the file and the dataset, before anything is read or allocated for it.
+TEST(Recording, DatasetsOfTheWrongShapeAreRefused) {
+  const fs::path good = scratch("shapes_good");
+  {
+    RecordingWriter writer(good, header());
+    std::vector<DeviceSample> batch(10);
+    for (int d = 0; d < 2; ++d) {
+      for (long k = 0; k < 10; ++k) batch[k] = sample(d, k);
+      writer.append(d, batch.data(), batch.size());
+    }
+    FrameRecord f;
+    f.stiffness_eigenvalues = {100, 200};
+    writer.append(f);
+  }
+  ASSERT_EQ(read_recording(good).devices.at(0).samples.size(), 10u);
+  struct Case {
+    const char* dataset;
+    std::vector<hsize_t> dims;
+  };
+  const std::vector<Case> cases = {
+      {"devices/left/time_s", {10, 2}},            // time with two columns
+      {"devices/left/position_m", {10, 3, 2}},     // positions with three dimensions
+      {"devices/right/force_n", {10, 4}},          // four components
+      {"devices/left/in_contact", {1000000000}},   // a billion rows claimed (nothing stored)
+      {"frames/frame", {1, 5}},                    // a malformed frames dataset
+      {"frames/gains", {1}},                       // gains without their two columns
+  };
+  for (const Case& c : cases) {
+    const fs::path bad = scratch(std::string("shapes_") + std::to_string(&c - cases.data()));
+    fs::copy_file(good, bad, fs::copy_options::overwrite_existing);
+    {
+      const hid_t file = H5Fopen(bad.c_str(), H5F_ACC_RDWR, H5P_DEFAULT);
+      ASSERT_GE(file, 0);
+      ASSERT_GE(H5Ldelete(file, c.dataset, H5P_DEFAULT), 0) << c.dataset;
+      const hid_t space = H5Screate_simple(static_cast<int>(c.dims.size()), c.dims.data(), nullptr);
+      const hid_t dataset = H5Dcreate2(file, c.dataset, H5T_NATIVE_DOUBLE, space, H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT);
+      ASSERT_GE(dataset, 0) << c.dataset;
+      H5Dclose(dataset), H5Sclose(space), H5Fclose(file);
+    }
+    try {
+      read_recording(bad);
+      ADD_FAILURE() << c.dataset << ": accepted";
+    } catch (const std::runtime_error& e) {
+      const std::string what = e.what();
+      const std::string leaf = fs::path(c.dataset).filename().string();
+      EXPECT_NE(what.find(bad.string()), std::string::npos) << what;
+      EXPECT_NE(what.find("dataset " + leaf + " has the shape"), std::string::npos) << what;
+    }
+    fs::remove(bad);
+  }
+  fs::remove(good);
 }
 
 }  // namespace
