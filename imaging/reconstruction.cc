@@ -1,11 +1,12 @@
 #include "imaging/reconstruction.h"
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
+#include <filesystem>
 #include <fstream>
 #include <limits>
 #include <map>
-#include <regex>
 #include <sstream>
 #include <stdexcept>
 
@@ -41,9 +42,36 @@ std::array<double, 3> apply(const Matrix4& m, double x, double y) {
 bool parse_matrix(const std::string& text, Matrix4& m) {
   std::istringstream in(text);
   for (double& v : m)
-    if (!(in >> v)) return false;
+    if (!(in >> v) || !std::isfinite(v)) return false;
   double extra;
   return !(in >> extra);
+}
+
+// The attributes of one XML start tag (the text between "<Name" and ">"), name to value; quotes '
+// or ". A loop over characters, not a regular expression: std::regex recurses per character and a
+// long attribute overflowed the stack. False if the tag is malformed.
+bool tag_attributes(const std::string& tag, std::map<std::string, std::string>& out) {
+  std::size_t i = 0;
+  const auto space = [&] {
+    while (i < tag.size() && std::isspace(static_cast<unsigned char>(tag[i]))) ++i;
+  };
+  for (;;) {
+    space();
+    if (i >= tag.size() || tag[i] == '/') return true;
+    const std::size_t name_start = i;
+    while (i < tag.size() && tag[i] != '=' && !std::isspace(static_cast<unsigned char>(tag[i]))) ++i;
+    const std::string name = tag.substr(name_start, i - name_start);
+    space();
+    if (name.empty() || i >= tag.size() || tag[i] != '=') return false;
+    ++i;
+    space();
+    if (i >= tag.size() || (tag[i] != '"' && tag[i] != '\'')) return false;
+    const char quote = tag[i++];
+    const std::size_t end = tag.find(quote, i);
+    if (end == std::string::npos) return false;
+    out[name] = tag.substr(i, end - i);
+    i = end + 1;
+  }
 }
 
 }  // namespace
@@ -94,16 +122,38 @@ TrackedSweep read_tracked_sweep(const std::filesystem::path& path) {
 
 Matrix4 read_image_to_probe(const std::filesystem::path& path) {
   const std::string name = path.string();
+  std::error_code error;
+  if (!std::filesystem::is_regular_file(path, error)) throw std::runtime_error(name + ": cannot open the calibration (not a file)");
+  // A PLUS configuration is a few kilobytes; anything past 64 MB is not one.
+  if (std::filesystem::file_size(path, error) > (64u << 20))
+    throw std::runtime_error(name + ": over 64 MB, not a PLUS configuration file");
   std::ifstream in(path);
   if (!in) throw std::runtime_error(name + ": cannot open the calibration");
   const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  const std::regex transform(R"re(<Transform\s+From="Image"\s+To="Probe"\s+Matrix="([^"]*)")re");
-  std::smatch match;
-  if (!std::regex_search(text, match, transform))
-    throw std::runtime_error(name + ": no <Transform From=\"Image\" To=\"Probe\" Matrix=\"...\"> element");
-  Matrix4 m;
-  if (!parse_matrix(match[1].str(), m)) throw std::runtime_error(name + ": the Image-to-Probe matrix is not 16 numbers");
-  return m;
+  for (std::size_t at = text.find("<Transform"); at != std::string::npos; at = text.find("<Transform", at + 1)) {
+    const std::size_t begin = at + std::string("<Transform").size();
+    if (begin < text.size() && !std::isspace(static_cast<unsigned char>(text[begin])) && text[begin] != '>' &&
+        text[begin] != '/')
+      continue;  // <TransformSomethingElse
+    const std::size_t end = text.find('>', begin);
+    const std::size_t line = 1 + static_cast<std::size_t>(std::count(text.begin(), text.begin() + static_cast<long>(at), '\n'));
+    std::map<std::string, std::string> attributes;
+    if (end == std::string::npos || !tag_attributes(text.substr(begin, end - begin), attributes))
+      throw std::runtime_error(name + ":" + std::to_string(line) + ": a malformed <Transform> element");
+    if (attributes["From"] != "Image" || attributes["To"] != "Probe") continue;
+    const auto matrix = attributes.find("Matrix");
+    if (matrix == attributes.end())
+      throw std::runtime_error(name + ":" + std::to_string(line) + ": the Image-to-Probe <Transform> has no Matrix");
+    Matrix4 m;
+    if (!parse_matrix(matrix->second, m)) {
+      std::string shown = matrix->second.substr(0, 80);
+      if (matrix->second.size() > 80) shown += "...";
+      throw std::runtime_error(name + ":" + std::to_string(line) + ": the Image-to-Probe matrix is not 16 finite numbers: '" +
+                               shown + "'");
+    }
+    return m;
+  }
+  throw std::runtime_error(name + ": no <Transform From=\"Image\" To=\"Probe\" Matrix=\"...\"> element");
 }
 
 Reconstruction reconstruct(const TrackedSweep& sweep, const Matrix4& image_to_probe, const ReconstructionSettings& s) {

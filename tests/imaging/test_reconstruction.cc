@@ -2,12 +2,13 @@
 // its calibration, against the volume PLUS reconstructed from the same sweep: the same extent within
 // one voxel and a normalised cross-correlation of at least 0.9 over the voxels both fill.
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
-#include <unistd.h>
+#include <vector>
 
 #include "imaging/reconstruction.h"
 #include "imaging/volume_io.h"
@@ -79,6 +80,44 @@ TEST(Reconstruction, MalformedInputsAreRefusedByName) {
     EXPECT_NE(std::string(e.what()).find(bad.string()), std::string::npos);
   }
   std::filesystem::remove(bad);
+}
+
+// Calibration files that crashed `reconstruct` (issue 17: a stack overflow in the pattern matcher
+// on a very long or whitespace-only attribute) or that hold no usable matrix: each refused naming the
+// file; a well-formed one with other transforms around it, single quotes and spread attributes read.
+TEST(Reconstruction, CalibrationFilesAreParsedWithoutRecursion) {
+  const auto file = std::filesystem::temp_directory_path() / ("calibration_parse_" + std::to_string(::getpid()) + ".xml");
+  const std::string identity = "1 0 0 0 0 1 0 0 0 0 1 0 0 0 0 1";
+  const std::vector<std::pair<std::string, std::string>> refused = {
+      {"<Transform From=\"Image\" To=\"Probe\" Matrix=\"" + std::string(2'000'000, '1') + "\"/>", "not 16 finite numbers"},
+      {"<Transform From=\"Image\" To=\"Probe\" Matrix=\"" + std::string(2'000'000, ' ') + "\"/>", "not 16 finite numbers"},
+      {"<Transform" + std::string(2'000'000, ' ') + "From=\"Image\"/>", "no <Transform"},
+      {"<Transform From=\"Image\" To=\"Probe\" Matrix=\"" + identity + "", "malformed"},
+      {"<Transform From=\"Image\" To=\"Probe\"/>", "has no Matrix"},
+      {"<Transform From=\"Image\" To=\"Probe\" Matrix=\"1 0 0 0 0 1 0 0 0 0 1 0 0 0 0 nan\"/>", "not 16 finite"},
+  };
+  for (const auto& [text, expected] : refused) {
+    std::ofstream(file) << "<PlusConfiguration>\n" << text << "\n</PlusConfiguration>";
+    try {
+      read_image_to_probe(file);
+      ADD_FAILURE() << text.substr(0, 60) << ": accepted";
+    } catch (const std::runtime_error& e) {
+      const std::string what = e.what();
+      EXPECT_NE(what.find(file.string()), std::string::npos) << what.substr(0, 200);
+      EXPECT_NE(what.find(expected), std::string::npos) << what.substr(0, 200);
+      EXPECT_LT(what.size(), 400u);  // the message quotes at most a little of the file
+    }
+  }
+  std::ofstream(file) << "<PlusConfiguration>\n<TransformRepository>\n"
+                      << "<Transform From=\"Probe\" To=\"Tracker\" Matrix=\"" << identity << "\"/>\n"
+                      << "<Transform\n   To='Probe'  From = \"Image\"\n   Matrix='2 0 0 1  0 2 0 2  0 0 2 3  0 0 0 1' />\n"
+                      << "</TransformRepository></PlusConfiguration>";
+  const Matrix4 m = read_image_to_probe(file);
+  EXPECT_EQ(m[0], 2);
+  EXPECT_EQ(m[3], 1);
+  EXPECT_EQ(m[11], 3);
+  EXPECT_EQ(m[15], 1);
+  std::filesystem::remove(file);
 }
 
 }  // namespace
