@@ -11,6 +11,7 @@
 #include "app/commands/commands.h"
 #include "app/exit_codes.h"
 #include "app/json_writer.h"
+#include "app/output_guard.h"
 #include "imaging/reconstruction.h"
 #include "imaging/volume_io.h"
 
@@ -33,6 +34,7 @@ int run_reconstruct(const ReconstructOptions& o) {
   settings.fill_holes = !o.no_fill;
   imaging::Reconstruction result;
   try {
+    refuse_overwriting({o.out}, {{o.sweep, "the sweep"}, {o.calibration, "the calibration"}});
     const imaging::TrackedSweep sweep = imaging::read_tracked_sweep(o.sweep);
     const imaging::Matrix4 calibration = imaging::read_image_to_probe(o.calibration);
     result = imaging::reconstruct(sweep, calibration, settings);

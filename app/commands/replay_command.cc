@@ -20,6 +20,7 @@
 #include "app/json_writer.h"
 #include "app/log.h"
 #include "app/mpi_session.h"
+#include "app/output_guard.h"
 #include "app/pvd.h"
 #include "app/recording.h"
 #include "app/scene_mesh.h"
@@ -392,6 +393,11 @@ SessionSummary run_session(const config::Scene& scene, const ReplayOptions& o, c
   return summary;
 }
 
+// The files a replay writes into its folder (the meshes go to its mesh/ subfolder).
+bool replay_writes(const std::string& file, const std::string& scene) {
+  return file == "recording.h5" || file == "summary.json" || file == scene + ".pvd";
+}
+
 int run_replay(const ReplayOptions& o) {
   const auto start = std::chrono::steady_clock::now();
   std::optional<config::Scene> loaded = load_scene_or_report(o.scene);
@@ -399,6 +405,16 @@ int run_replay(const ReplayOptions& o) {
   config::Scene scene = std::move(*loaded);
   if (scene.probes.empty()) {
     std::cerr << "error: " << o.scene << ": the scene has no probes to replay\n";
+    return kExitBadInput;
+  }
+  try {  // before anything runs: the output must not replace the scene, its mesh or a trajectory
+    std::vector<NamedInput> inputs = {{o.scene, "the scene"}, {scene.mesh.path, "the scene's mesh"},
+                                      {o.trajectory, "the trajectory"}};
+    for (const config::Probe& probe : scene.probes)
+      inputs.emplace_back(probe.device.trajectory, "the trajectory of probe " + probe.name);
+    refuse_overwriting({fs::path(o.out)}, inputs, fs::path(o.out), replay_writes, scene.name);
+  } catch (const std::invalid_argument& e) {
+    std::cerr << "error: " << e.what() << "\n";
     return kExitBadInput;
   }
   ensure_mpi();

@@ -19,6 +19,7 @@
 #include "app/exit_codes.h"
 #include "app/json_writer.h"
 #include "app/log.h"
+#include "app/output_guard.h"
 #include "app/scene_mesh.h"
 #include "app/mpi_session.h"
 #include "app/pvd.h"
@@ -142,6 +143,14 @@ void write_json(std::ostream& out, const SolveOptions& o, const config::Scene& s
   json.end_object();
 }
 
+// The files a solve writes into its folder: NAME.vtu, NAME.pvd, NAME_K.vtu (time steps), pieces
+// NAME*.pvtu / .vtu, and summary.json.
+bool solve_writes(const std::string& file, const std::string& scene) {
+  const fs::path f(file);
+  const std::string ext = f.extension().string();
+  return file == "summary.json" || (file.rfind(scene, 0) == 0 && (ext == ".vtu" || ext == ".pvd" || ext == ".pvtu"));
+}
+
 int run_solve(const SolveOptions& o) {
   if (o.press.size() % 6 != 0) {
     std::cerr << "error: --press takes six numbers per probe: X Y Z FX FY FZ (m and N)\n";
@@ -154,6 +163,13 @@ int run_solve(const SolveOptions& o) {
   std::optional<config::Scene> loaded = load_scene_or_report(o.scene);
   if (!loaded) return kExitBadInput;
   config::Scene scene = std::move(*loaded);
+  try {  // before anything is built: the output must not replace the scene or its mesh
+    const fs::path dir = o.out.empty() ? fs::path("fetouch-solve") / scene.name : fs::path(o.out);
+    refuse_overwriting({dir}, {{o.scene, "the scene"}, {scene.mesh.path, "the scene's mesh"}}, dir, solve_writes, scene.name);
+  } catch (const std::invalid_argument& e) {
+    std::cerr << "error: " << e.what() << "\n";
+    return kExitBadInput;
+  }
   ensure_mpi();
   std::unique_ptr<fem::TissueModel> model;
   std::vector<int> patches;
