@@ -23,8 +23,8 @@
 // A K that is not positive definite falls back to PETSc's MUMPS LDL'.
 //
 // Or, selectable (and chosen by size in the scene), CG preconditioned by algebraic multigrid
-// (PETSc's GAMG, told the rigid-body modes as its near-null space), set up again when CG needs half
-// as many iterations again as it did after the last set-up.
+// (PETSc's GAMG, plain aggregation, told the rigid-body modes as its near-null space), set up
+// again when CG needs half as many iterations again as it did after the last set-up.
 //
 // In parallel the matrix is PETSc's MPIAIJ over a communicator, each rank owning a contiguous block
 // of rows, with MUMPS as the factorisation (CHOLMOD is serial). Every rank keeps the whole CSR
