@@ -5,6 +5,7 @@
 #include <exception>
 #include <iostream>
 #include <string>
+#include <utility>
 
 #include "app/build_info.h"
 #include "app/commands/commands.h"
@@ -56,6 +57,22 @@ int run_cli(int argc, char** argv) {
     else if (verbosity == 1) log::set_level(log::Level::detail);
   });
 
+  // An unknown command: CLI11 would only say that a subcommand is required.
+  for (int i = 1; i < argc; ++i) {
+    const std::string word = argv[i];
+    if (word.empty() || word[0] == '-') continue;  // -v, -q, --help, --version take no value
+    const auto all = [](const CLI::App*) { return true; };
+    std::string known;
+    bool found = false;
+    for (const CLI::App* command : std::as_const(app).get_subcommands(all)) {
+      known += (known.empty() ? "" : ", ") + command->get_name();
+      found = found || command->get_name() == word;
+    }
+    if (found) break;
+    std::cerr << "error: unknown command '" << word << "'; the commands are " << known
+              << ".\nRun `fetouch --help` for what each does.\n";
+    return kExitBadInput;
+  }
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {

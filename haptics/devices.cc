@@ -4,10 +4,12 @@
 
 #include <algorithm>
 #include <cmath>
+#include <filesystem>
 #include <fstream>
 #include <iomanip>
 #include <sstream>
 #include <stdexcept>
+#include <string>
 
 namespace fetouch::haptics {
 
@@ -31,7 +33,31 @@ std::vector<Eigen::Vector3d> Trajectory::resampled(double period_s) const {
   return out;
 }
 
+void Trajectory::check(const std::string& source) const {
+  if (times_s.size() != positions_m.size())
+    throw std::runtime_error(source + ": " + std::to_string(times_s.size()) + " times but " +
+                             std::to_string(positions_m.size()) + " positions");
+  for (std::size_t i = 0; i < times_s.size(); ++i) {
+    const std::string row = source + ": sample " + std::to_string(i);
+    if (!std::isfinite(times_s[i]) || !positions_m[i].allFinite()) throw std::runtime_error(row + " is not finite");
+    if (i > 0 && !(times_s[i] > times_s[i - 1]))
+      throw std::runtime_error(row + ": time " + std::to_string(times_s[i]) + " s is not after the previous " +
+                               std::to_string(times_s[i - 1]) + " s (times must strictly increase)");
+    if (positions_m[i].norm() > kMaxReachM)
+      throw std::runtime_error(row + ": a point " + std::to_string(positions_m[i].norm()) +
+                               " m from the origin (at most 10 m; positions are in metres)");
+  }
+  if (duration_s() > kMaxDurationS)
+    throw std::runtime_error(source + ": lasts " + std::to_string(duration_s()) + " s; a replay lasts at most " +
+                             std::to_string(kMaxDurationS) + " s");
+}
+
 Trajectory read_trajectory_csv(const std::filesystem::path& path) {
+  std::error_code error;
+  if (!std::filesystem::is_regular_file(path, error))
+    throw std::runtime_error(path.string() + ": not a regular file (a trajectory is a CSV file, not a folder, FIFO or device)");
+  if (std::filesystem::file_size(path, error) > (512u << 20))
+    throw std::runtime_error(path.string() + ": over 512 MB, too large for a trajectory");
   std::ifstream in(path);
   if (!in) throw std::runtime_error(path.string() + ": cannot be opened");
   Trajectory t;
@@ -67,6 +93,7 @@ Trajectory read_trajectory_csv(const std::filesystem::path& path) {
   if (t.times_s.size() < 2)
     throw std::runtime_error(path.string() + ": a trajectory needs at least two rows of t, x, y, z (found " +
                              std::to_string(t.times_s.size()) + ")");
+  t.check(path.string());
   return t;
 }
 

@@ -28,11 +28,18 @@ struct Trajectory {
   Eigen::Vector3d at(double t) const;
   // Samples every `period_s` from the first time to the last (inclusive when it falls on a tick).
   std::vector<Eigen::Vector3d> resampled(double period_s) const;
+  // Throws std::runtime_error starting with `source` unless every value is finite, the times
+  // strictly increase, the trajectory lasts at most kMaxDurationS and no point is farther than
+  // kMaxReachM from the origin.
+  void check(const std::string& source) const;
+  static constexpr double kMaxDurationS = 3600;  // an hour: 3.6 million ticks at 1 kHz
+  static constexpr double kMaxReachM = 10;       // a probe 10 m from the scene's origin is a unit error
 };
 
 // Reads `t, x, y, z` rows (s, m); a header line of names and lines starting with '#' are skipped.
 // Throws std::runtime_error naming the file, the line and the value: not four numbers, a time not
-// after the previous one, fewer than two rows, a value not finite.
+// after the previous one, fewer than two rows, a value not finite, then Trajectory::check. Only a
+// regular file is read (a FIFO or a device would block or never end), of at most 512 MB.
 Trajectory read_trajectory_csv(const std::filesystem::path& path);
 
 // Writes the same format (with a header), full precision.

@@ -154,6 +154,7 @@ haptics::Trajectory probe_trajectory(const config::Probe& probe, int index, cons
     if (!d || d->samples.size() < 2) throw std::runtime_error(file.string() + ": no positions for probe " + probe.name);
     haptics::Trajectory t;
     for (const auto& s : d->samples) t.times_s.push_back(s.time_s), t.positions_m.push_back(s.position);
+    t.check(file.string() + " (probe " + d->name + ")");
     return t;
   }
   return haptics::read_trajectory_csv(file);

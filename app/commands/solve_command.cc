@@ -7,6 +7,7 @@
 #include <mpi.h>
 
 #include <chrono>
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <iomanip>
@@ -160,6 +161,12 @@ int run_solve(const SolveOptions& o) {
     std::cerr << "error: --point takes three numbers: X Y Z (m)\n";
     return kExitBadInput;
   }
+  for (const auto& [option, values] : {std::pair<const char*, const std::vector<double>*>{"--press", &o.press}, {"--point", &o.points}})
+    for (const double v : *values)
+      if (!std::isfinite(v)) {
+        std::cerr << "error: " << option << ": " << v << " is not a finite number\n";
+        return kExitBadInput;
+      }
   std::optional<config::Scene> loaded = load_scene_or_report(o.scene);
   if (!loaded) return kExitBadInput;
   config::Scene scene = std::move(*loaded);

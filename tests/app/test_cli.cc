@@ -1,7 +1,9 @@
 // The fetouch binary as a user meets it: version, help on every command, exit codes.
 #include <gtest/gtest.h>
 
+#include <filesystem>
 #include <regex>
+#include <string>
 
 #include "tests/support/run_command.h"
 
@@ -49,6 +51,17 @@ TEST(Cli, BadUsageExitsTwoWithAHint) {
     EXPECT_NE(r.err.find("--help"), std::string::npos) << arguments << ": " << r.err;
     EXPECT_TRUE(r.out.empty()) << arguments;  // errors on stderr, never stdout
   }
+  // An unknown command is named, with the commands there are (issue 17: "A subcommand is required").
+  const auto unknown = run_command(fetouch("-v frobnicate x.yaml"));
+  EXPECT_EQ(unknown.exit_code, 2);
+  EXPECT_NE(unknown.err.find("unknown command 'frobnicate'"), std::string::npos) << unknown.err;
+  EXPECT_NE(unknown.err.find("check, stability, solve"), std::string::npos) << unknown.err;
+  // A number that is not one (issue 17: exit 1 and no message for a NaN --press).
+  const std::string scene = std::string(FETOUCH_SOURCE_DIR) + "/config/scenes/block_press.yaml";
+  const auto nan = run_command(fetouch("solve " + scene + " --out /tmp/fetouch_nan_press --press 0.05 0.04 0.05 0 0 nan"));
+  EXPECT_EQ(nan.exit_code, 2);
+  EXPECT_NE(nan.err.find("--press: nan is not a finite number"), std::string::npos) << nan.err;
+  EXPECT_FALSE(std::filesystem::exists("/tmp/fetouch_nan_press"));
 }
 
 TEST(Cli, QuietAndVerboseWorkBeforeOrAfterTheCommand) {

@@ -3,6 +3,8 @@
 // forms of a mass-spring-damper (undamped step response, static deflection under a force, tracking
 // of a ramp).
 #include <gtest/gtest.h>
+#include <sys/stat.h>
+#include <unistd.h>
 
 #include <cmath>
 #include <filesystem>
@@ -58,7 +60,42 @@ TEST(Trajectory, BrokenFilesNameTheLine) {
   refused("back.csv", "0,0,0,0\n1,0,0,0\n0.5,0,0,0\n", ":3:");
   refused("nan.csv", "0,0,0,0\n1,nan,0,0\n", ":2:");
   refused("one.csv", "t,x,y,z\n0,0,0,0\n", ": a trajectory needs at least two rows");
+  refused("long.csv", "0,0,0,0\n100000,0,0,0\n", ": lasts 100000");     // 10^5 s: 10^8 ticks (issue 17)
+  refused("far.csv", "0,0,0,0\n1,50,0,0\n", ": sample 1: a point 50");  // millimetres written as metres
   EXPECT_THROW(read_trajectory_csv("/nonexistent/path.csv"), std::runtime_error);
+}
+
+// Special files hung the replay (issue 17): a FIFO blocks its reader until a writer comes, and a
+// device like /dev/zero never ends. Both are refused at once, without opening them.
+TEST(Trajectory, OnlyRegularFilesAreRead) {
+  const fs::path fifo = fs::temp_directory_path() / ("fetouch_fifo_" + std::to_string(::getpid()) + ".csv");
+  ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
+  for (const fs::path& special : {fifo, fs::path("/dev/zero"), fs::temp_directory_path()}) {
+    try {
+      read_trajectory_csv(special);
+      ADD_FAILURE() << special << " was accepted";
+    } catch (const std::runtime_error& e) {
+      EXPECT_NE(std::string(e.what()).find("not a regular file"), std::string::npos) << e.what();
+    }
+  }
+  fs::remove(fifo);
+}
+
+// The same checks for a trajectory made in memory (a recording's positions).
+TEST(Trajectory, CheckRefusesRepeatedTimesAndNaN) {
+  Trajectory t;
+  t.times_s = {0, 0.001, 0.001};
+  t.positions_m.assign(3, Eigen::Vector3d::Zero());
+  EXPECT_THROW(t.check("recording"), std::runtime_error);
+  t.times_s = {0, 0.001, 0.002};
+  EXPECT_NO_THROW(t.check("recording"));
+  t.positions_m[1].y() = std::nan("");
+  try {
+    t.check("rec.h5");
+    ADD_FAILURE() << "NaN accepted";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("rec.h5: sample 1 is not finite"), std::string::npos) << e.what();
+  }
 }
 
 TEST(ReplayDevice, PlaysTheResampledPathWhateverTheForce) {
