@@ -248,6 +248,14 @@ struct CoreSplit {
 
 }  // namespace
 
+int realtime_solver_cores(const SessionSettings& settings) {
+  const CoreSplit split = CoreSplit::make(settings.pin_haptic_core);
+  if (split.haptic >= 0) return CPU_COUNT(&split.others);
+  cpu_set_t allowed;
+  CPU_ZERO(&allowed);
+  return sched_getaffinity(0, sizeof allowed, &allowed) == 0 ? CPU_COUNT(&allowed) : 1;
+}
+
 SessionSummary run_realtime(haptics::Environment& environment, std::vector<std::unique_ptr<haptics::Device>>& devices,
                             const SessionSettings& settings) {
   SessionBase base(environment, devices, settings);

@@ -79,4 +79,8 @@ SessionSummary run_lockstep(haptics::Environment& environment, std::vector<std::
 SessionSummary run_realtime(haptics::Environment& environment, std::vector<std::unique_ptr<haptics::Device>>& devices,
                             const SessionSettings& settings);
 
+// The cores run_realtime leaves the solver's threads: all the process may use but the haptic
+// thread's (when it has one of its own).
+int realtime_solver_cores(const SessionSettings& settings);
+
 }  // namespace fetouch::app

@@ -33,6 +33,14 @@ std::vector<Eigen::Vector3d> Trajectory::resampled(double period_s) const {
   return out;
 }
 
+std::pair<double, double> Trajectory::longest_hold() const {
+  std::pair<double, double> best{0, 0};
+  for (std::size_t i = 1; i < times_s.size(); ++i)
+    if ((positions_m[i] - positions_m[i - 1]).norm() < 1e-12 && times_s[i] - times_s[i - 1] > best.second - best.first)
+      best = {times_s[i - 1], times_s[i]};
+  return best;
+}
+
 void Trajectory::check(const std::string& source) const {
   if (times_s.size() != positions_m.size())
     throw std::runtime_error(source + ": " + std::to_string(times_s.size()) + " times but " +

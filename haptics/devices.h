@@ -15,6 +15,7 @@
 
 #include <filesystem>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace fetouch::haptics {
@@ -28,6 +29,8 @@ struct Trajectory {
   Eigen::Vector3d at(double t) const;
   // Samples every `period_s` from the first time to the last (inclusive when it falls on a tick).
   std::vector<Eigen::Vector3d> resampled(double period_s) const;
+  // The longest stretch [from, to] over which the path stays put (0, 0 if it never does).
+  std::pair<double, double> longest_hold() const;
   // Throws std::runtime_error starting with `source` unless every value is finite, the times
   // strictly increase, the trajectory lasts at most kMaxDurationS and no point is farther than
   // kMaxReachM from the origin.

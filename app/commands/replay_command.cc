@@ -3,7 +3,6 @@
 // tissue in lockstep (app/session.h), recorded to HDF5 with a summary.
 #include <CLI/CLI.hpp>
 #include <mpi.h>
-#include <sched.h>
 
 #include <chrono>
 #include <filesystem>
@@ -177,15 +176,6 @@ struct IdealComparison {
   double hold_start_s = 0, hold_end_s = 0;
 };
 
-// The longest stretch over which the first probe's trajectory stays put.
-std::pair<double, double> longest_hold(const haptics::Trajectory& t) {
-  std::pair<double, double> best{0, 0};
-  for (std::size_t i = 1; i < t.times_s.size(); ++i)
-    if ((t.positions_m[i] - t.positions_m[i - 1]).norm() < 1e-12 && t.times_s[i] - t.times_s[i - 1] > best.second - best.first)
-      best = {t.times_s[i - 1], t.times_s[i]};
-  return best;
-}
-
 double settling_time(const std::vector<Eigen::Vector3d>& force, double period, double start, double end) {
   const long a = std::lround(start / period), b = std::min<long>(std::lround(end / period), static_cast<long>(force.size()) - 1);
   if (b <= a) return 0;
@@ -200,7 +190,7 @@ double settling_time(const std::vector<Eigen::Vector3d>& force, double period, d
 IdealComparison compare_with_ideal(const config::Scene& scene, const ReplayOptions& o) {
   IdealComparison c;
   const haptics::HapticLoopSettings base = loop_settings(scene);
-  const auto hold = longest_hold(probe_trajectory(scene.probes.front(), 0, o));
+  const auto hold = probe_trajectory(scene.probes.front(), 0, o).longest_hold();
   c.hold_start_s = hold.first, c.hold_end_s = hold.second;
   haptics::HapticLoopSettings ideal_settings = base;
   ideal_settings.ratio = 1;
@@ -375,14 +365,9 @@ SessionSummary run_session(const config::Scene& scene, const ReplayOptions& o, c
   }
   const bool realtime = out && o.clock == "realtime";  // the comparison runs are lockstep
   if (realtime && !distributed) {
-    // The solver's share of the machine in real time: every core but the haptic thread's. On one
-    // core a second assembly thread only takes turns with the first and the factorisation worker,
-    // and a frame must not wait for that worker: it takes the new factorisation up when it is ready.
-    cpu_set_t allowed;
-    CPU_ZERO(&allowed);
-    const int cores = sched_getaffinity(0, sizeof allowed, &allowed) == 0 ? CPU_COUNT(&allowed) : 1;
-    const int solver_cores = session.pin_haptic_core ? std::max(1, cores - 1) : cores;
-    environment.solver().set_assembly_threads(solver_cores >= 2 ? 2 : 1);
+    // On one core a second assembly thread only takes turns with the first; and a frame never
+    // waits for the factorisation worker: it takes the new factorisation up when it is ready.
+    environment.solver().set_assembly_threads(realtime_solver_cores(session) >= 2 ? 2 : 1);
     environment.solver().set_deterministic_factorisations(false);
   }
   log::info() << "replaying " << scene.probes.size() << " probe(s) " << (realtime ? "in real time" : "in lockstep")
