@@ -2,6 +2,7 @@
 
 #include <CLI/CLI.hpp>
 
+#include <algorithm>
 #include <exception>
 #include <iostream>
 #include <string>
@@ -58,20 +59,20 @@ int run_cli(int argc, char** argv) {
   });
 
   // An unknown command: CLI11 would only say that a subcommand is required.
-  for (int i = 1; i < argc; ++i) {
-    const std::string word = argv[i];
-    if (word.empty() || word[0] == '-') continue;  // -v, -q, --help, --version take no value
-    const auto all = [](const CLI::App*) { return true; };
+  // The first word that is not an option (-v, -q, --help and --version take no value) is the command.
+  const char* const* word = std::find_if(argv + 1, argv + argc, [](const char* a) { return a[0] != '-' && a[0] != '\0'; });
+  if (word != argv + argc) {
     std::string known;
     bool found = false;
-    for (const CLI::App* command : std::as_const(app).get_subcommands(all)) {
+    for (const CLI::App* command : std::as_const(app).get_subcommands([](const CLI::App*) { return true; })) {
       known += (known.empty() ? "" : ", ") + command->get_name();
-      found = found || command->get_name() == word;
+      found = found || command->get_name() == *word;
     }
-    if (found) break;
-    std::cerr << "error: unknown command '" << word << "'; the commands are " << known
-              << ".\nRun `fetouch --help` for what each does.\n";
-    return kExitBadInput;
+    if (!found) {
+      std::cerr << "error: unknown command '" << *word << "'; the commands are " << known
+                << ".\nRun `fetouch --help` for what each does.\n";
+      return kExitBadInput;
+    }
   }
   try {
     app.parse(argc, argv);

@@ -15,8 +15,7 @@ bool same_file(const fs::path& a, const fs::path& b) {
 }
 
 void refuse_overwriting(const std::vector<fs::path>& written, const std::vector<NamedInput>& inputs,
-                        const fs::path& folder, bool (*written_in_folder)(const std::string&, const std::string&),
-                        const std::string& scene_name) {
+                        const fs::path& folder, const std::function<bool(const std::string&)>& written_in_folder) {
   for (const auto& [input, role] : inputs) {
     if (input.empty()) continue;
     for (const fs::path& output : written)
@@ -24,7 +23,7 @@ void refuse_overwriting(const std::vector<fs::path>& written, const std::vector<
         throw std::invalid_argument("--out: writing " + output.string() + " would overwrite " + role + " " +
                                     input.string() + "; choose another output");
     if (!folder.empty() && written_in_folder && same_file(input.parent_path().empty() ? "." : input.parent_path(), folder) &&
-        written_in_folder(input.filename().string(), scene_name))
+        written_in_folder(input.filename().string()))
       throw std::invalid_argument("--out: the folder " + folder.string() + " holds " + role + " " + input.string() +
                                   ", which this command would overwrite; choose another output folder");
   }

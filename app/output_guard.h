@@ -4,6 +4,7 @@
 #pragma once
 
 #include <filesystem>
+#include <functional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -18,10 +19,9 @@ bool same_file(const std::filesystem::path& a, const std::filesystem::path& b);
 using NamedInput = std::pair<std::filesystem::path, std::string>;
 
 // Throws std::invalid_argument naming both when one of `written` is one of `inputs`, or when an
-// input lies in `folder` (if not empty) with a name `written_in_folder` says the command writes there.
+// input lies in `folder` (if given) under a file name `written_in_folder` says the command writes.
 void refuse_overwriting(const std::vector<std::filesystem::path>& written, const std::vector<NamedInput>& inputs,
                         const std::filesystem::path& folder = {},
-                        bool (*written_in_folder)(const std::string& name, const std::string& scene) = nullptr,
-                        const std::string& scene_name = {});
+                        const std::function<bool(const std::string& file_name)>& written_in_folder = {});
 
 }  // namespace fetouch::app

@@ -379,11 +379,6 @@ SessionSummary run_session(const config::Scene& scene, const ReplayOptions& o, c
   return summary;
 }
 
-// The files a replay writes into its folder (the meshes go to its mesh/ subfolder).
-bool replay_writes(const std::string& file, const std::string& scene) {
-  return file == "recording.h5" || file == "summary.json" || file == scene + ".pvd";
-}
-
 int run_replay(const ReplayOptions& o) {
   const auto start = std::chrono::steady_clock::now();
   std::optional<config::Scene> loaded = load_scene_or_report(o.scene);
@@ -398,7 +393,11 @@ int run_replay(const ReplayOptions& o) {
                                       {o.trajectory, "the trajectory"}};
     for (const config::Probe& probe : scene.probes)
       inputs.emplace_back(probe.device.trajectory, "the trajectory of probe " + probe.name);
-    refuse_overwriting({fs::path(o.out)}, inputs, fs::path(o.out), replay_writes, scene.name);
+    // What a replay writes there (its meshes go to the mesh/ subfolder).
+    const auto writes = [&scene](const std::string& file) {
+      return file == "recording.h5" || file == "summary.json" || file == scene.name + ".pvd";
+    };
+    refuse_overwriting({fs::path(o.out)}, inputs, fs::path(o.out), writes);
   } catch (const std::invalid_argument& e) {
     std::cerr << "error: " << e.what() << "\n";
     return kExitBadInput;

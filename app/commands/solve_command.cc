@@ -144,14 +144,6 @@ void write_json(std::ostream& out, const SolveOptions& o, const config::Scene& s
   json.end_object();
 }
 
-// The files a solve writes into its folder: NAME.vtu, NAME.pvd, NAME_K.vtu (time steps), pieces
-// NAME*.pvtu / .vtu, and summary.json.
-bool solve_writes(const std::string& file, const std::string& scene) {
-  const fs::path f(file);
-  const std::string ext = f.extension().string();
-  return file == "summary.json" || (file.rfind(scene, 0) == 0 && (ext == ".vtu" || ext == ".pvd" || ext == ".pvtu"));
-}
-
 int run_solve(const SolveOptions& o) {
   if (o.press.size() % 6 != 0) {
     std::cerr << "error: --press takes six numbers per probe: X Y Z FX FY FZ (m and N)\n";
@@ -172,7 +164,12 @@ int run_solve(const SolveOptions& o) {
   config::Scene scene = std::move(*loaded);
   try {  // before anything is built: the output must not replace the scene or its mesh
     const fs::path dir = o.out.empty() ? fs::path("fetouch-solve") / scene.name : fs::path(o.out);
-    refuse_overwriting({dir}, {{o.scene, "the scene"}, {scene.mesh.path, "the scene's mesh"}}, dir, solve_writes, scene.name);
+    // What a solve writes there: NAME.vtu, NAME.pvd, NAME_K.vtu (time steps), NAME*.pvtu pieces, summary.json.
+    const auto writes = [&scene](const std::string& file) {
+      const std::string ext = fs::path(file).extension().string();
+      return file == "summary.json" || (file.rfind(scene.name, 0) == 0 && (ext == ".vtu" || ext == ".pvd" || ext == ".pvtu"));
+    };
+    refuse_overwriting({dir}, {{o.scene, "the scene"}, {scene.mesh.path, "the scene's mesh"}}, dir, writes);
   } catch (const std::invalid_argument& e) {
     std::cerr << "error: " << e.what() << "\n";
     return kExitBadInput;
