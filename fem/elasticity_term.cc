@@ -1,7 +1,5 @@
 #include "fem/elasticity_term.h"
 
-#include <deal.II/lac/full_matrix.h>
-
 #include <algorithm>
 #include <array>
 #include <stdexcept>
@@ -50,32 +48,44 @@ const Material& ElasticityTerm::material_of(unsigned int cell) const {
 }
 
 // The cells add -f_int into r (free dofs), f_int into `internal` (if given) and, if
-// `values`, the tangent into that value array. False if J <= 0 somewhere.
-bool ElasticityTerm::assemble_cells(const std::vector<unsigned int>& cells, const Vector<double>& u, double* r,
+// `values`, the tangent into that value array. False if J <= 0 somewhere. NB scalar base functions
+// per cell (P1 4, Q1 8, P2 10, Q2 27): every per-cell array has a fixed size, and the tangent, symmetric
+// for a hyperelastic material, is computed on and above its diagonal and mirrored.
+template <int NB>
+bool ElasticityTerm::assemble_fixed(const std::vector<unsigned int>& cells, const Vector<double>& u, double* r,
                                     double* internal, double* values, const LinearSystem& system) const {
+  constexpr int N = 3 * NB;
   const Discretisation::Cells& c = d_.cells();
   const std::vector<bool>& constrained = system.constrained();
   const bool tangent = values != nullptr;
-  const unsigned int n = c.n, nq = c.nq;
-  FullMatrix<double> cell_matrix(n, n);
-  Vector<double> cell_internal(n);
-  std::vector<double> u_local(n);
-  std::vector<std::array<Tensor<1, 3>, 3>> a_grad(n);
-  std::vector<double> volume_gradient(mean_dilatation_ ? n : 0);
+  const unsigned int nq = c.nq;
+  std::array<int, N> comp, base;  // cell dof i is component comp[i] of scalar base function base[i]
+  for (int i = 0; i < N; ++i) comp[i] = static_cast<int>(c.component[i]), base[i] = static_cast<int>(c.base[i]);
+  std::array<double, N> u_local, cell_internal, volume_gradient;
+  std::vector<double> cell_matrix(tangent ? std::size_t(N) * N : 0);  // [i][j], upper triangle until mirrored
+  double ag[NB][3][3][3];  // jxw A[ci][J][cj][.] . grad phi_b, so that K_ij = grad phi_i . ag[b_j][c_i][c_j]
   std::vector<Tensor2> F_at(nq);
   Tensor2 P;
   Tensor4 A;
   for (const unsigned int k : cells) {
-    const types::global_dof_index* indices = &c.indices[std::size_t(k) * n];
+    const types::global_dof_index* indices = &c.indices[std::size_t(k) * N];
     const Material& material = material_of(k);
-    d_.gather(k, u, u_local.data());
-    for (unsigned int q = 0; q < nq; ++q) F_at[q] = d_.deformation_gradient(k, q, u_local.data());
-    cell_matrix = 0;
-    cell_internal = 0;
+    for (int i = 0; i < N; ++i) u_local[i] = u[indices[i]];
+    for (unsigned int q = 0; q < nq; ++q) {
+      const Tensor<1, 3>* grad = &c.gradients[(std::size_t(k) * nq + q) * NB];
+      Tensor2& F = F_at[q];
+      F = 0;
+      for (int i = 0; i < N; ++i)
+        for (int J = 0; J < 3; ++J) F[comp[i]][J] += u_local[i] * grad[base[i]][J];
+      for (int a = 0; a < 3; ++a) F[a][a] += 1;
+    }
+    cell_internal.fill(0);
+    if (tangent) std::fill(cell_matrix.begin(), cell_matrix.end(), 0.0);
     // Mean dilatation: U(J) becomes U(theta) of the cell's volume ratio theta = v / V, its pressure
-    // p = U'(theta) constant over the cell.
+    // p = U'(theta) constant over the cell. One point (P1): theta = J, nothing changes.
+    const bool dilatation = mean_dilatation_ && nq > 1;
     double reference_volume = 0, pressure = 0, pressure_stiffness = 0;
-    if (mean_dilatation_) {
+    if (dilatation) {
       double volume = 0;
       for (unsigned int q = 0; q < nq; ++q) {
         const double jxw = c.jxw[std::size_t(k) * nq + q];
@@ -85,14 +95,14 @@ bool ElasticityTerm::assemble_cells(const std::vector<unsigned int>& cells, cons
         reference_volume += jxw;
       }
       material.volumetric(volume / reference_volume, pressure, pressure_stiffness);
-      std::fill(volume_gradient.begin(), volume_gradient.end(), 0.0);
+      volume_gradient.fill(0);
     }
     for (unsigned int q = 0; q < nq; ++q) {
-      const Tensor<1, 3>* grad = &c.gradients[(std::size_t(k) * nq + q) * c.nbase];
+      const Tensor<1, 3>* grad = &c.gradients[(std::size_t(k) * nq + q) * NB];
       const double jxw = c.jxw[std::size_t(k) * nq + q];
       const Tensor2& F = F_at[q];
       if (!material.evaluate(F, P, tangent ? &A : nullptr)) return false;
-      if (mean_dilatation_) {
+      if (dilatation) {
         // Swap the point's volumetric stress U'(J) J F^-T for the cell's p J F^-T, and in the
         // tangent U''(J) J^2 F^-T x F^-T + U'(J) d2J for p d2J, d2J = J (F^-T x F^-T - F^-T o F^-1).
         const double j = determinant(F);
@@ -108,43 +118,61 @@ bool ElasticityTerm::assemble_cells(const std::vector<unsigned int>& cells, cons
                 for (int dd = 0; dd < 3; ++dd)
                   A[a][b][cc][dd] -= u2 * j * j * f_inv_t[a][b] * f_inv_t[cc][dd] +
                                      excess * j * (f_inv_t[a][b] * f_inv_t[cc][dd] - f_inv_t[a][dd] * f_inv_t[cc][b]);
-        for (unsigned int i = 0; i < n; ++i)  // dv/du_i = int J F^-T : grad N_i
-          volume_gradient[i] += j * (f_inv_t[c.component[i]] * grad[c.base[i]]) * jxw;
+        for (int i = 0; i < N; ++i)  // dv/du_i = int J F^-T : grad N_i
+          volume_gradient[i] += j * (f_inv_t[comp[i]] * grad[base[i]]) * jxw;
       }
-      if (tangent)  // a_grad[j][c] = A[c][.][c_j][.] grad phi_j, so that K_ij = grad phi_i . a_grad[j][c_i]
-        for (unsigned int j = 0; j < n; ++j) {
-          const Tensor<1, 3>& g = grad[c.base[j]];
-          for (int ci = 0; ci < 3; ++ci)
-            for (int J = 0; J < 3; ++J) {
-              double v = 0;
-              for (int L = 0; L < 3; ++L) v += A[ci][J][c.component[j]][L] * g[L];
-              a_grad[j][ci][J] = v * jxw;
-            }
+      for (int i = 0; i < N; ++i) {
+        const Tensor<1, 3>& g = grad[base[i]];
+        cell_internal[i] += (P[comp[i]][0] * g[0] + P[comp[i]][1] * g[1] + P[comp[i]][2] * g[2]) * jxw;
+      }
+      if (!tangent) continue;
+      for (int b = 0; b < NB; ++b) {
+        const Tensor<1, 3>& g = grad[b];
+        for (int ci = 0; ci < 3; ++ci)
+          for (int J = 0; J < 3; ++J)
+            for (int cj = 0; cj < 3; ++cj)
+              ag[b][ci][cj][J] = jxw * (A[ci][J][cj][0] * g[0] + A[ci][J][cj][1] * g[1] + A[ci][J][cj][2] * g[2]);
+      }
+      for (int i = 0; i < N; ++i) {
+        const Tensor<1, 3>& g = grad[base[i]];
+        double* row = &cell_matrix[std::size_t(i) * N];
+        for (int j = i; j < N; ++j) {
+          const double* x = ag[base[j]][comp[i]][comp[j]];
+          row[j] += g[0] * x[0] + g[1] * x[1] + g[2] * x[2];
         }
-      for (unsigned int i = 0; i < n; ++i) {
-        const unsigned int ci = c.component[i];
-        const Tensor<1, 3>& g = grad[c.base[i]];
-        cell_internal(i) += (P[ci][0] * g[0] + P[ci][1] * g[1] + P[ci][2] * g[2]) * jxw;
-        if (!tangent) continue;
-        for (unsigned int j = 0; j < n; ++j) cell_matrix(i, j) += g * a_grad[j][ci];
       }
     }
-    if (mean_dilatation_ && tangent) {  // U''(theta)/V (dv/du)(dv/du)'
-      const double scale = pressure_stiffness / reference_volume;
-      for (unsigned int i = 0; i < n; ++i)
-        for (unsigned int j = 0; j < n; ++j) cell_matrix(i, j) += scale * volume_gradient[i] * volume_gradient[j];
+    if (tangent) {
+      if (dilatation) {  // U''(theta)/V (dv/du)(dv/du)'
+        const double scale = pressure_stiffness / reference_volume;
+        for (int i = 0; i < N; ++i)
+          for (int j = i; j < N; ++j) cell_matrix[std::size_t(i) * N + j] += scale * volume_gradient[i] * volume_gradient[j];
+      }
+      for (int i = 1; i < N; ++i)
+        for (int j = 0; j < i; ++j) cell_matrix[std::size_t(i) * N + j] = cell_matrix[std::size_t(j) * N + i];
     }
     // Homogeneous constraints: constrained rows and columns are dropped (finish() puts their diagonal).
     const int* where = tangent ? system.cell_scatter(k) : nullptr;
-    for (unsigned int i = 0; i < n; ++i) {
-      if (internal) internal[indices[i]] += cell_internal(i);
-      if (!constrained[indices[i]]) r[indices[i]] -= cell_internal(i);
+    for (int i = 0; i < N; ++i) {
+      if (internal) internal[indices[i]] += cell_internal[i];
+      if (!constrained[indices[i]]) r[indices[i]] -= cell_internal[i];
       if (!tangent) continue;
-      for (unsigned int j = 0; j < n; ++j)
-        if (where[i * n + j] >= 0) values[where[i * n + j]] += cell_matrix(i, j);
+      for (int j = 0; j < N; ++j)
+        if (where[i * N + j] >= 0) values[where[i * N + j]] += cell_matrix[std::size_t(i) * N + j];
     }
   }
   return true;
+}
+
+bool ElasticityTerm::assemble_cells(const std::vector<unsigned int>& cells, const Vector<double>& u, double* r,
+                                    double* internal, double* values, const LinearSystem& system) const {
+  switch (d_.cells().nbase) {
+    case 4: return assemble_fixed<4>(cells, u, r, internal, values, system);
+    case 8: return assemble_fixed<8>(cells, u, r, internal, values, system);
+    case 10: return assemble_fixed<10>(cells, u, r, internal, values, system);
+    case 27: return assemble_fixed<27>(cells, u, r, internal, values, system);
+    default: throw std::logic_error("no elasticity kernel for this element");
+  }
 }
 
 void ElasticityTerm::plan_threads() const {

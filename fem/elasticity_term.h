@@ -49,6 +49,9 @@ class ElasticityTerm final : public Term {
  private:
   bool assemble_cells(const std::vector<unsigned int>& cells, const dealii::Vector<double>& u, double* r,
                       double* internal, double* values, const LinearSystem& system) const;
+  template <int NB>
+  bool assemble_fixed(const std::vector<unsigned int>& cells, const dealii::Vector<double>& u, double* r,
+                      double* internal, double* values, const LinearSystem& system) const;
   void plan_threads() const;
   const Discretisation& d_;
   const Material& body_;

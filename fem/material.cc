@@ -65,20 +65,34 @@ bool InvariantMaterial::evaluate(const Tensor2& F, Tensor2& P, Tensor4* A) const
   const std::array<Tensor2, 3> g{2 * F, 2 * (i1 * F - fc), j * f_inv_t};  // dI1, dI2, dJ by dF
   P = d.d[0] * g[0] + d.d[1] * g[1] + d.d[2] * g[2];
   if (!A) return true;
+  // A = sum_pq h_pq g_p x g_q + psi_1 d2I1 + psi_2 d2I2 + psi_J d2J, built term by term and only
+  // from the terms a model has (a neo-Hookean solid has no I2 and one Hessian entry): the hot loop
+  // of every assembly.
+  Tensor4& a = *A;
+  const double jd = d.d[2] * j;
   for (int i = 0; i < dim; ++i)
     for (int J = 0; J < dim; ++J)
       for (int k = 0; k < dim; ++k)
-        for (int L = 0; L < dim; ++L) {
-          double a = 0;
-          for (int p = 0; p < 3; ++p)
-            for (int q = 0; q < 3; ++q) a += d.h[p][q] * g[p][i][J] * g[q][k][L];
-          const double dik_djl = delta(i, k) * delta(J, L);
-          a += d.d[0] * 2 * dik_djl;
-          a += d.d[1] * (4 * F[i][J] * F[k][L] + 2 * i1 * dik_djl - 2 * delta(i, k) * c[L][J] - 2 * F[i][L] * F[k][J] -
-                         2 * b[i][k] * delta(J, L));
-          a += d.d[2] * j * (f_inv_t[i][J] * f_inv_t[k][L] - f_inv_t[i][L] * f_inv_t[k][J]);
-          (*A)[i][J][k][L] = a;
-        }
+        for (int L = 0; L < dim; ++L) a[i][J][k][L] = jd * (f_inv_t[i][J] * f_inv_t[k][L] - f_inv_t[i][L] * f_inv_t[k][J]);
+  for (int p = 0; p < 3; ++p) {
+    if (d.h[p][0] == 0 && d.h[p][1] == 0 && d.h[p][2] == 0) continue;
+    const Tensor2 hg = d.h[p][0] * g[0] + d.h[p][1] * g[1] + d.h[p][2] * g[2];
+    for (int i = 0; i < dim; ++i)
+      for (int J = 0; J < dim; ++J)
+        for (int k = 0; k < dim; ++k)
+          for (int L = 0; L < dim; ++L) a[i][J][k][L] += g[p][i][J] * hg[k][L];
+  }
+  const double d1 = d.d[1];
+  if (d1 != 0)
+    for (int i = 0; i < dim; ++i)
+      for (int J = 0; J < dim; ++J)
+        for (int k = 0; k < dim; ++k)
+          for (int L = 0; L < dim; ++L)
+            a[i][J][k][L] += d1 * (4 * F[i][J] * F[k][L] - 2 * delta(i, k) * c[L][J] - 2 * F[i][L] * F[k][J] -
+                                   2 * b[i][k] * delta(J, L));
+  const double diagonal = 2 * d.d[0] + 2 * i1 * d1;  // the d_ik d_JL terms of d2I1 and d2I2
+  for (int i = 0; i < dim; ++i)
+    for (int J = 0; J < dim; ++J) a[i][J][i][J] += diagonal;
   return true;
 }
 
