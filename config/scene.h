@@ -90,6 +90,14 @@ struct Material {
   double density_kg_per_m3 = 1000;
 };
 
+// A material for one region of the mesh (`materials:`): a volume physical group of a Gmsh mesh by
+// name, or a material id by number (a .vtu's ids, the labels of a mesh made from a label map).
+struct RegionMaterial {
+  std::string region;
+  Material material;
+  SourceLocation where;  // the region's key
+};
+
 // ---- effects ------------------------------------------------------------------------------------
 
 enum class Effect { elasticity, gravity, inertia, damping, incompressibility, cavity, contact };
@@ -225,7 +233,11 @@ struct Scene {
   std::string name;
   std::string description;
   MeshSpec mesh;
+  // `material:`, every region's that `materials:` does not name; when only `materials:` is given, its
+  // first entry (and material_given is false: every region must then be named).
   Material material;
+  bool material_given = true;
+  std::vector<RegionMaterial> materials;
   Effects effects;
   std::vector<BoundaryRegion> boundary;
   Solver solver;

@@ -53,12 +53,6 @@ const Choices<GeneratedShape> kShapes{{"box", GeneratedShape::box},
 const Choices<SmoothingFilter> kFilters{{"none", SmoothingFilter::none},
                                         {"gaussian", SmoothingFilter::gaussian},
                                         {"median", SmoothingFilter::median}};
-const Choices<MaterialModel> kModels{
-    {"linear_elastic", MaterialModel::linear_elastic},
-    {"saint_venant_kirchhoff", MaterialModel::saint_venant_kirchhoff},
-    {"neo_hookean", MaterialModel::neo_hookean},
-    {"neo_hookean_incompressible", MaterialModel::neo_hookean_incompressible},
-    {"mooney_rivlin", MaterialModel::mooney_rivlin}};
 const Choices<Effect> kEffects{{"elasticity", Effect::elasticity},
                                {"gravity", Effect::gravity},
                                {"inertia", Effect::inertia},
@@ -211,32 +205,6 @@ void read_mesh(MapView& scene, MeshSpec& out) {
     out.meshing.labels = {1, 2, 3, 4, 5, 6};
 }
 
-// ---- material -----------------------------------------------------------------------------------
-
-void read_material(MapView& scene, Material& out) {
-  const Entry e = scene.entry("material");
-  MapView map(scene.reader(), e.value, e.path, e.key_mark,
-              {"model", "youngs_modulus_pa", "poisson_ratio", "c10_pa", "c01_pa", "bulk_modulus_pa",
-               "density_kg_per_m3"});
-  if (!map.valid()) return;
-  map.number("density_kg_per_m3", out.density_kg_per_m3, Range::positive());
-  if (!map.choice("model", out.model, kModels, Need::required)) return;
-  if (out.model == MaterialModel::mooney_rivlin) {
-    reject_keys(map, {"youngs_modulus_pa", "poisson_ratio"},
-                "by mooney_rivlin (it takes c10_pa, c01_pa and bulk_modulus_pa)");
-    map.number("c10_pa", out.c10_pa, Range::positive(), Need::required);
-    map.number("c01_pa", out.c01_pa, Range::non_negative(), Need::required);
-    map.number("bulk_modulus_pa", out.bulk_modulus_pa, Range::positive(), Need::required);
-  } else {
-    reject_keys(map, {"c10_pa", "c01_pa", "bulk_modulus_pa"},
-                std::string("by ") + name_of(kModels, out.model) +
-                    " (it takes youngs_modulus_pa and poisson_ratio)");
-    map.number("youngs_modulus_pa", out.youngs_modulus_pa, Range::positive(), Need::required);
-    // The bounds of an isotropic solid: K > 0 and mu > 0 with E > 0 give -1 < nu < 0.5.
-    map.number("poisson_ratio", out.poisson_ratio, {-1, 0.5, true, true}, Need::required);
-  }
-}
-
 // ---- effects ------------------------------------------------------------------------------------
 
 void read_effect_parameters(Reader& reader, Effect effect, const Entry& e, Effects& out) {
@@ -377,8 +345,8 @@ LoadedScene parse_scene(const std::string& text, const std::string& label,
   Scene& s = loaded.scene;
   s.text = text;
   MapView scene(reader, root, "", root.Mark(),
-                {"name", "description", "units", "mesh", "material", "effects", "boundary",
-                 "solver", "haptics", "probes"});
+                {"name", "description", "units", "mesh", "material", "materials", "effects",
+                 "boundary", "solver", "haptics", "probes"});
   if (scene.valid()) {
     scene.text("name", s.name);
     scene.text("description", s.description);
@@ -387,9 +355,8 @@ LoadedScene parse_scene(const std::string& text, const std::string& label,
       reader.error(scene.entry("units").value_mark, "units",
                    "only SI is supported (m, N, s, Pa, kg), got '" + units + "'");
     scene.require("mesh", "file, volume or generate");
-    scene.require("material", "the tissue's constitutive model and parameters");
     if (scene.has("mesh")) read_mesh(scene, s.mesh);
-    if (scene.has("material")) read_material(scene, s.material);
+    read_materials(scene, s);
     if (scene.has("effects")) read_effects(scene, s.effects);
     if (scene.has("boundary")) read_boundary(scene, s.boundary);
     if (scene.has("solver")) read_solver(scene, s.solver);
@@ -447,7 +414,6 @@ const char* to_string(MeshSource v) {
 const char* to_string(ElementType v) { return name_of(kElements, v); }
 const char* to_string(GeneratedShape v) { return name_of(kShapes, v); }
 const char* to_string(SmoothingFilter v) { return name_of(kFilters, v); }
-const char* to_string(MaterialModel v) { return name_of(kModels, v); }
 const char* to_string(Effect v) { return name_of(kEffects, v); }
 const char* to_string(TimeIntegrator v) { return name_of(kIntegrators, v); }
 const char* to_string(PressureVolumeLaw v) { return name_of(kLaws, v); }

@@ -22,6 +22,8 @@ std::string format_number(double value);
 // Reports each key of `keys` present in `map` as not used in the situation `why` describes.
 void reject_keys(MapView& map, const std::vector<std::string>& keys, const std::string& why);
 
+// `material` and `materials` (material_reader.cc): at least one of them.
+void read_materials(MapView& scene, Scene& out);
 void read_boundary(MapView& scene, std::vector<BoundaryRegion>& out);  // boundary_reader.cc
 void read_solver(MapView& scene, Solver& out);                        // session_reader.cc
 void read_haptics(MapView& scene, Haptics& out);

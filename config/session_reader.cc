@@ -223,9 +223,12 @@ void check_cross_fields(MapView& scene, Scene& s) {
     reader.warning(scene.entry("effects").key_mark, "effects",
                    "probes are defined but 'contact' is not among the effects, so they will not "
                    "touch the tissue");
-  if (s.effects.has(Effect::incompressibility) &&
-      s.material.model != MaterialModel::neo_hookean_incompressible &&
-      s.material.model != MaterialModel::mooney_rivlin)
+  const auto decoupled = [](const Material& m) {
+    return m.model == MaterialModel::neo_hookean_incompressible || m.model == MaterialModel::mooney_rivlin;
+  };
+  bool all_decoupled = !s.material_given || decoupled(s.material);
+  for (const RegionMaterial& m : s.materials) all_decoupled = all_decoupled && decoupled(m.material);
+  if (s.effects.has(Effect::incompressibility) && !all_decoupled)
     reader.warning(scene.entry("effects").key_mark, "effects",
                    "incompressibility is meant for neo_hookean_incompressible or mooney_rivlin");
 }

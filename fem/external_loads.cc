@@ -13,7 +13,7 @@ void ExternalLoadsTerm::add_traction(unsigned int boundary_id, const Tensor<1, 3
   built_ = false;
 }
 
-void ExternalLoadsTerm::set_body_force(std::function<Tensor<1, 3>(const Point<3>&)> force) {
+void ExternalLoadsTerm::set_body_force(BodyForce force) {
   body_force_ = std::move(force);
   built_ = false;
 }
@@ -30,7 +30,7 @@ void ExternalLoadsTerm::build() {
     if (body_force_) {
       values.reinit(cell);
       for (unsigned int q = 0; q < c.nq; ++q) {
-        const Tensor<1, 3> f = body_force_(values.quadrature_point(q));
+        const Tensor<1, 3> f = body_force_(values.quadrature_point(q), cell->material_id());
         for (unsigned int i = 0; i < c.n; ++i)
           cell_external(i) += f[c.component[i]] * values.shape_value_component(i, q, c.component[i]) * values.JxW(q);
       }

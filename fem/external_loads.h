@@ -21,7 +21,9 @@ class ExternalLoadsTerm final : public Term {
   bool assemble(const AssemblyState& state, AssemblyTarget& target) override;
 
   void add_traction(unsigned int boundary_id, const dealii::Tensor<1, 3>& traction);
-  void set_body_force(std::function<dealii::Tensor<1, 3>(const dealii::Point<3>&)> force);
+  // Per reference volume, at a point of a cell with this material id.
+  using BodyForce = std::function<dealii::Tensor<1, 3>(const dealii::Point<3>&, unsigned int material_id)>;
+  void set_body_force(BodyForce force);
 
  private:
   void build();
@@ -31,7 +33,7 @@ class ExternalLoadsTerm final : public Term {
     dealii::Tensor<1, 3> value;
   };
   std::vector<Traction> tractions_;
-  std::function<dealii::Tensor<1, 3>(const dealii::Point<3>&)> body_force_;
+  BodyForce body_force_;
   dealii::Vector<double> external_;  // at full load
   bool built_ = false;
 };

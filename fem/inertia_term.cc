@@ -16,6 +16,12 @@ InertiaTerm::InertiaTerm(const Discretisation& discretisation, const Dynamics& d
   u_old_.reinit(d_.n_dofs());
   v_old_.reinit(d_.n_dofs());
   a_old_.reinit(d_.n_dofs());
+  const Discretisation::Cells& c = d_.cells();
+  density_.assign(d_.n_cells(), dynamics.density_kg_per_m3);
+  for (unsigned int k = 0; k < d_.n_cells(); ++k)
+    if (const auto region = dynamics.region_density_kg_per_m3.find(c.material_id[k]);
+        region != dynamics.region_density_kg_per_m3.end())
+      density_[k] = region->second;
 }
 
 double InertiaTerm::acceleration(double u_new, std::size_t i) const {
@@ -53,7 +59,7 @@ bool InertiaTerm::assemble(const AssemblyState& state, AssemblyTarget& target) {
     const double a_new = acceleration(u[i], i);
     inertial_[i] = a_new + dynamics_.rayleigh_mass_per_s * velocity(u[i], a_new, i);
   }
-  const double rho = dynamics_.density_kg_per_m3, gain = c0_ + dynamics_.rayleigh_mass_per_s * velocity_gain();
+  const double gain = c0_ + dynamics_.rayleigh_mass_per_s * velocity_gain();
   const unsigned int n = c.n, nq = c.nq;
   std::vector<double> local(n), cell_internal(n), cell_matrix(std::size_t(n) * n);
   for (const unsigned int k : d_.my_cells) {
@@ -63,7 +69,7 @@ bool InertiaTerm::assemble(const AssemblyState& state, AssemblyTarget& target) {
     std::fill(cell_matrix.begin(), cell_matrix.end(), 0.0);
     for (unsigned int q = 0; q < nq; ++q) {
       const double* shape = &c.shape_values[q * c.nbase];
-      const double w = rho * c.jxw[std::size_t(k) * nq + q];
+      const double w = density_[k] * c.jxw[std::size_t(k) * nq + q];
       double field[3] = {0, 0, 0};
       for (unsigned int j = 0; j < n; ++j) field[c.component[j]] += shape[c.base[j]] * local[j];
       for (unsigned int i = 0; i < n; ++i) {

@@ -11,6 +11,7 @@
 // StiffnessDampingTerm, built only when beta > 0, adds beta K0 v+ and reads that state.
 #pragma once
 
+#include <map>
 #include <vector>
 
 #include "fem/discretisation.h"
@@ -20,6 +21,7 @@ namespace fetouch::fem {
 
 struct Dynamics {
   double density_kg_per_m3 = 1000;
+  std::map<unsigned int, double> region_density_kg_per_m3;  // by material id; others density_kg_per_m3
   double time_step_s = 0.05;
   bool newmark = true;  // false: backward Euler
   double beta = 0.25, gamma = 0.5;
@@ -47,6 +49,7 @@ class InertiaTerm final : public Term {
   double c0_ = 0, c1_ = 0, c2_ = 0;  // a+ = c0 (u+ - u_old) - c1 v_old - c2 a_old
   dealii::Vector<double> u_old_, v_old_, a_old_;
   dealii::Vector<double> inertial_;  // a+ + alpha v+ per dof, at the assembled state
+  std::vector<double> density_;      // per cell
 };
 
 class StiffnessDampingTerm final : public Term {

@@ -84,6 +84,10 @@ void QuasiStaticSolver::apply_traction(unsigned int boundary_id, const Tensor<1,
 }
 
 void QuasiStaticSolver::apply_body_force(std::function<Tensor<1, 3>(const Point<3>&)> force) {
+  loads(*impl_).set_body_force([force](const Point<3>& x, unsigned int) { return force(x); });
+}
+
+void QuasiStaticSolver::apply_body_force(std::function<Tensor<1, 3>(const Point<3>&, unsigned int)> force) {
   loads(*impl_).set_body_force(std::move(force));
 }
 

@@ -75,6 +75,8 @@ class QuasiStaticSolver {
 
   // A body force per reference volume (N/m^3) as a field, scaled by the load factor.
   void apply_body_force(std::function<dealii::Tensor<1, 3>(const dealii::Point<3>&)> force);
+  // The same, per material id (a density per region).
+  void apply_body_force(std::function<dealii::Tensor<1, 3>(const dealii::Point<3>&, unsigned int material_id)> force);
 
   SolveReport solve(const NewtonSettings& settings);
 

@@ -26,19 +26,20 @@ bool wants_simplex(config::ElementType element) {
   return element == config::ElementType::p1 || element == config::ElementType::p2;
 }
 
-// Names of the physical groups of a Gmsh file, keyed by tag; deal.II's read_msh turns the tags into
-// boundary ids but drops the names.
-std::map<std::string, unsigned int> gmsh_surface_groups(const std::string& file) {
+// Names of the physical groups of a Gmsh file of dimension `dim` (2: boundary regions, 3: volume
+// regions), keyed by name; deal.II's read_msh turns the tags into boundary and material ids but drops
+// the names.
+std::map<std::string, unsigned int> gmsh_groups(const std::string& file, int dim) {
   std::map<std::string, unsigned int> names;
   gmsh::initialize();
   gmsh::option::setNumber("General.Terminal", 0);
   try {
     gmsh::open(file);
     gmsh::vectorpair groups;
-    gmsh::model::getPhysicalGroups(groups, 2);
-    for (const auto& [dim, tag] : groups) {
+    gmsh::model::getPhysicalGroups(groups, dim);
+    for (const auto& [group_dim, tag] : groups) {
       std::string name;
-      gmsh::model::getPhysicalName(dim, tag, name);
+      gmsh::model::getPhysicalName(group_dim, tag, name);
       names[name.empty() ? "group " + std::to_string(tag) : name] = static_cast<unsigned int>(tag);
     }
   } catch (...) {
@@ -141,6 +142,7 @@ void generate(const config::GeneratedMesh& g, bool simplex, Triangulation<3>& tr
 TissueMeshInfo build_tissue_mesh(const config::MeshSpec& spec, Triangulation<3>& tria) {
   tria.clear();
   TissueMeshInfo info;
+  std::map<unsigned int, std::string> volume_names;  // by material id
   const bool simplex = wants_simplex(spec.element);
   switch (spec.source) {
     case config::MeshSource::generated:
@@ -186,7 +188,8 @@ TissueMeshInfo build_tissue_mesh(const config::MeshSpec& spec, Triangulation<3>&
         throw unreadable("Gmsh failed");
       }
       if (tria.n_active_cells() == 0) throw std::runtime_error(file + ": the mesh has no volume cells");
-      info.boundary_ids = gmsh_surface_groups(file);
+      info.boundary_ids = gmsh_groups(file, 2);
+      for (const auto& [name, tag] : gmsh_groups(file, 3)) volume_names[tag] = name;
       break;
     }
     case config::MeshSource::volume:
@@ -206,10 +209,69 @@ TissueMeshInfo build_tissue_mesh(const config::MeshSpec& spec, Triangulation<3>&
   // cell->measure() is exact for tetrahedra and trilinear hexahedra; GridTools::volume() would need a
   // mapping suited to the reference cell (its default, MappingQ1, fails on simplices).
   info.volume_m3 = 0;
-  for (const auto& cell : tria.active_cell_iterators()) info.volume_m3 += cell->measure();
+  std::map<unsigned int, TissueMeshInfo::Region> regions;
+  for (const auto& cell : tria.active_cell_iterators()) {
+    const double volume = cell->measure();
+    info.volume_m3 += volume;
+    TissueMeshInfo::Region& region = regions[cell->material_id()];
+    ++region.cells;
+    region.volume_m3 += volume;
+  }
+  for (auto& [id, region] : regions) {
+    region.material_id = id;
+    if (const auto name = volume_names.find(id); name != volume_names.end()) region.name = name->second;
+    info.regions.push_back(region);
+  }
   info.min_diameter_m = dealii::GridTools::minimal_cell_diameter(tria);
   info.max_diameter_m = dealii::GridTools::maximal_cell_diameter(tria);
   return info;
+}
+
+std::string describe_region(const TissueMeshInfo::Region& region) {
+  const std::string id = "id " + std::to_string(region.material_id);
+  return region.name.empty() ? id : region.name + " (" + id + ")";
+}
+
+RegionMaterials assign_region_materials(const config::Scene& scene, const TissueMeshInfo& mesh) {
+  RegionMaterials out;
+  const std::string file = scene.source.string();
+  const auto problem = [&](const config::SourceLocation& where, const std::string& key, const std::string& message) {
+    config::Diagnostic d;
+    d.file = file, d.line = where.line, d.column = where.column, d.key = key, d.message = message;
+    out.problems.push_back(d);
+  };
+  std::string listed;
+  std::vector<std::string> names;
+  for (const auto& region : mesh.regions) {
+    listed += (listed.empty() ? "" : ", ") + describe_region(region);
+    names.push_back(region.name.empty() ? std::to_string(region.material_id) : region.name);
+  }
+  for (std::size_t i = 0; i < scene.materials.size(); ++i) {
+    const config::RegionMaterial& m = scene.materials[i];
+    bool found = false;
+    for (const auto& region : mesh.regions)
+      if (m.region == region.name || m.region == std::to_string(region.material_id)) {
+        found = true;
+        if (!out.of_region.count(region.material_id)) out.of_region[region.material_id] = static_cast<int>(i);
+      }
+    if (found) continue;
+    std::string message = "the mesh has no region '" + m.region + "'";
+    const std::string suggestion = config::closest_match(m.region, names);
+    if (!suggestion.empty()) message += "; did you mean '" + suggestion + "'?";
+    problem(m.where, "materials." + m.region, message + " (its regions: " + listed + ")");
+  }
+  for (const auto& region : mesh.regions) {
+    if (out.of_region.count(region.material_id)) continue;
+    if (scene.material_given) {
+      out.of_region[region.material_id] = -1;
+      continue;
+    }
+    const config::SourceLocation where = scene.materials.empty() ? config::SourceLocation{} : scene.materials.front().where;
+    problem(where, "materials",
+            "region " + describe_region(region) + " (" + std::to_string(region.cells) +
+                " cells) has no material: name it under materials:, or give material: for every region not named");
+  }
+  return out;
 }
 
 TissueMeshInfo inspect_tissue_mesh(const config::MeshSpec& spec) {

@@ -33,6 +33,18 @@ std::unique_ptr<TissueModel> build_tissue_model(const config::Scene& scene) {
   auto model = std::make_unique<TissueModel>();
   model->mesh = build_tissue_mesh(scene.mesh, model->triangulation);
   model->material = make_material(scene.material);
+  const RegionMaterials assigned = assign_region_materials(scene, model->mesh);
+  if (!assigned.problems.empty()) {
+    std::string message;
+    for (const config::Diagnostic& d : assigned.problems)
+      message += (message.empty() ? "" : "; ") + d.key + " (line " + std::to_string(d.line) + "): " + d.message;
+    throw std::runtime_error(message);
+  }
+  for (const auto& [id, index] : assigned.of_region) {
+    const config::Material& m = index < 0 ? scene.material : scene.materials[static_cast<std::size_t>(index)].material;
+    model->region_density_kg_per_m3[id] = m.density_kg_per_m3;
+    if (index >= 0) model->region_materials[id] = make_material(m);
+  }
   model->degree = scene.mesh.element == config::ElementType::p2 || scene.mesh.element == config::ElementType::q2 ? 2 : 1;
 
   // Boundary ids for box and plane selectors, above every id the mesh uses.
@@ -66,6 +78,7 @@ std::unique_ptr<TissueModel> build_tissue_model(const config::Scene& scene) {
   }
 
   model->solver = std::make_unique<QuasiStaticSolver>(model->triangulation, *model->material, model->degree);
+  for (const auto& [id, material] : model->region_materials) model->solver->set_region_material(id, *material);
   // The linear solver: CG on a stale factorisation, or CG with algebraic multigrid past the size
   // where factorising costs too much (solver.direct_max_dofs) or when the scene asks for it.
   const bool amg = scene.solver.linear_solver == config::LinearSolver::cg_amg ||
@@ -82,10 +95,14 @@ std::unique_ptr<TissueModel> build_tissue_model(const config::Scene& scene) {
       model->solver->apply_traction(id, t);
     }
   }
-  if (scene.effects.has(config::Effect::gravity)) {
-    dealii::Tensor<1, 3> weight;
-    for (int d = 0; d < 3; ++d) weight[d] = scene.material.density_kg_per_m3 * scene.effects.gravity_m_per_s2[d];
-    model->solver->apply_body_force([weight](const dealii::Point<3>&) { return weight; });
+  if (scene.effects.has(config::Effect::gravity)) {  // rho g, rho of each region
+    dealii::Tensor<1, 3> g;
+    for (int d = 0; d < 3; ++d) g[d] = scene.effects.gravity_m_per_s2[d];
+    model->solver->apply_body_force(
+        [g, density = model->region_density_kg_per_m3](const dealii::Point<3>&, unsigned int id) {
+          const auto rho = density.find(id);
+          return rho == density.end() ? dealii::Tensor<1, 3>() : rho->second * g;
+        });
   }
   if (scene.effects.has(config::Effect::cavity)) {
     const auto found = model->mesh.boundary_ids.find(scene.effects.cavity_surface);
@@ -105,7 +122,9 @@ std::unique_ptr<TissueModel> build_tissue_model(const config::Scene& scene) {
     // The mean-dilatation formulation; a coupled material has no volumetric part to take per cell
     // (the scene loader warned), and keeps the displacement formulation.
     double u1 = 0, u2 = 0;
-    if (model->material->volumetric(1.0, u1, u2)) model->solver->use_mean_dilatation(true);
+    bool decoupled = model->material->volumetric(1.0, u1, u2);
+    for (const auto& [id, material] : model->region_materials) decoupled = decoupled && material->volumetric(1.0, u1, u2);
+    if (decoupled) model->solver->use_mean_dilatation(true);
   }
   model->newton.relative_tolerance = scene.solver.newton_relative_tolerance;
   model->newton.absolute_tolerance = scene.solver.newton_absolute_tolerance;
@@ -119,7 +138,7 @@ std::unique_ptr<TissueModel> build_tissue_model(const config::Scene& scene) {
   return model;
 }
 
-std::optional<QuasiStaticSolver::Dynamics> scene_dynamics(const config::Scene& scene) {
+std::optional<QuasiStaticSolver::Dynamics> scene_dynamics(const config::Scene& scene, const TissueModel* model) {
   const bool damping = scene.effects.has(config::Effect::damping);
   if (!scene.effects.has(config::Effect::inertia)) {
     if (damping) throw std::runtime_error("effect damping needs effect inertia (Rayleigh damping acts on the motion)");
@@ -127,6 +146,7 @@ std::optional<QuasiStaticSolver::Dynamics> scene_dynamics(const config::Scene& s
   }
   QuasiStaticSolver::Dynamics d;
   d.density_kg_per_m3 = scene.material.density_kg_per_m3;
+  if (model) d.region_density_kg_per_m3 = model->region_density_kg_per_m3;
   d.time_step_s = 1.0 / scene.solver.rate_hz;
   switch (scene.effects.integrator) {
     case config::TimeIntegrator::newmark: d.newmark = true; break;

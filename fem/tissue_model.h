@@ -22,7 +22,9 @@ namespace fetouch::fem {
 struct TissueModel {
   dealii::Triangulation<3> triangulation;
   TissueMeshInfo mesh;
-  std::unique_ptr<Material> material;
+  std::unique_ptr<Material> material;  // the body's: the scene's `material`, or its first region's
+  std::map<unsigned int, std::unique_ptr<Material>> region_materials;  // by material id, from `materials`
+  std::map<unsigned int, double> region_density_kg_per_m3;            // every region's
   std::unique_ptr<QuasiStaticSolver> solver;
   std::map<std::string, unsigned int> region_ids;  // scene boundary region -> boundary id
   std::map<std::string, unsigned int> region_faces;  // scene boundary region -> faces selected
@@ -30,12 +32,14 @@ struct TissueModel {
   int degree = 1;
 };
 
-// Throws std::runtime_error naming the region when a selector selects no face.
+// Throws std::runtime_error naming the region when a selector selects no face, and at the scene's
+// file and line when `materials` names a region the mesh lacks or leaves a region without one.
 std::unique_ptr<TissueModel> build_tissue_model(const config::Scene& scene);
 
 // The time stepping a scene asks for (effects inertia and damping; one step per solver frame), or
 // nothing for a quasi-static scene. Throws std::runtime_error for what the solver cannot do yet
 // (HHT-alpha), naming it.
-std::optional<QuasiStaticSolver::Dynamics> scene_dynamics(const config::Scene& scene);
+// `model`: the densities of its regions (the scene's `material` density elsewhere).
+std::optional<QuasiStaticSolver::Dynamics> scene_dynamics(const config::Scene& scene, const TissueModel* model = nullptr);
 
 }  // namespace fetouch::fem

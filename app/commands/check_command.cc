@@ -110,6 +110,8 @@ void check_referenced_data(SceneReport& report) {
     log::detail() << "building the mesh in deal.II";
     report.tissue = fem::inspect_tissue_mesh(mesh);
     check_group_names(report, report.tissue->boundary_ids);
+    for (const config::Diagnostic& d : fem::assign_region_materials(scene, *report.tissue).problems)
+      report.errors.push_back(diagnostic_at(report.file, {d.line, d.column}, d.key, d.message));
   } catch (const std::exception& e) {
     report.errors.push_back(diagnostic_at(report.file, mesh.where,
                                           mesh.source == config::MeshSource::volume ? "mesh.volume"
@@ -244,7 +246,23 @@ void print_text(const SceneReport& r, std::ostream& out) {
   };
   if (!s.name.empty()) row("scene", s.name + (s.description.empty() ? "" : ": " + s.description));
   row("mesh", describe_mesh(r));
-  row("material", describe_material(s.material));
+  if ((r.tissue && r.tissue->regions.size() > 1) || !s.materials.empty()) {
+    // Each region with its volume and the material it takes (known once the mesh was read).
+    if (r.tissue) {
+      const fem::RegionMaterials assigned = fem::assign_region_materials(s, *r.tissue);
+      for (const auto& region : r.tissue->regions) {
+        const int index = assigned.of_region.at(region.material_id);
+        row("region", fem::describe_region(region) + ": " + std::to_string(region.cells) + " cells, " +
+                          number(region.volume_m3 * 1e6) + " cm^3; " +
+                          describe_material(index < 0 ? s.material : s.materials[std::size_t(index)].material));
+      }
+    } else {
+      if (s.material_given) row("material", describe_material(s.material) + " (regions not named below)");
+      for (const auto& m : s.materials) row("material", m.region + ": " + describe_material(m.material));
+    }
+  } else {
+    row("material", describe_material(s.material));
+  }
   row("effects", describe_effects(s.effects));
   for (const auto& b : s.boundary) row("boundary", describe_region(b));
   std::string newton = number(s.solver.newton_relative_tolerance);
@@ -329,6 +347,31 @@ void write_json(const std::vector<SceneReport>& reports, std::ostream& out) {
       json.key("poisson_ratio").value(s.material.poisson_ratio);
       json.key("density_kg_per_m3").value(s.material.density_kg_per_m3);
       json.end_object();
+      json.key("materials").begin_object();  // by region, as written
+      for (const auto& m : s.materials) {
+        json.key(m.region).begin_object();
+        json.key("model").value(config::to_string(m.material.model));
+        json.key("youngs_modulus_pa").value(m.material.youngs_modulus_pa);
+        json.key("poisson_ratio").value(m.material.poisson_ratio);
+        json.key("density_kg_per_m3").value(m.material.density_kg_per_m3);
+        json.end_object();
+      }
+      json.end_object();
+      if (r.tissue) {
+        const fem::RegionMaterials assigned = fem::assign_region_materials(s, *r.tissue);
+        json.key("regions").begin_array();
+        for (const auto& region : r.tissue->regions) {
+          json.begin_object();
+          json.key("material_id").value(static_cast<long>(region.material_id));
+          json.key("name").value(region.name);
+          json.key("cells").value(static_cast<long>(region.cells));
+          json.key("volume_m3").value(region.volume_m3);
+          const int index = assigned.of_region.at(region.material_id);
+          json.key("material").value(index < 0 ? std::string("material") : "materials." + s.materials[std::size_t(index)].region);
+          json.end_object();
+        }
+        json.end_array();
+      }
       json.key("effects").begin_array();
       json.value("elasticity");
       for (auto e : s.effects.listed)

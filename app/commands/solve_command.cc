@@ -195,7 +195,7 @@ int run_solve(const SolveOptions& o) {
   }
   std::optional<fem::QuasiStaticSolver::Dynamics> dynamics;
   try {
-    dynamics = fem::scene_dynamics(scene);
+    dynamics = fem::scene_dynamics(scene, model.get());
   } catch (const std::exception& e) {
     std::cerr << "error: " << o.scene << ": " << e.what() << "\n";
     return kExitBadInput;

@@ -124,6 +124,46 @@ TEST(SceneLoader, ReportsEveryErrorOfAFileAtOnce) {
   }
 }
 
+// `materials:` maps region names (or material ids) to materials checked like `material:`; it may
+// stand alone, and each error names the region's own key.
+TEST(SceneLoader, MaterialsPerRegion) {
+  const std::string mesh = "mesh: {generate: {shape: box, size_m: [1, 1, 1]}}\n";
+  const Scene s = parse_scene(mesh +
+                                  "materials:\n"
+                                  "  wall: {model: neo_hookean, youngs_modulus_pa: 20000, poisson_ratio: 0.45}\n"
+                                  "  3: {model: mooney_rivlin, c10_pa: 500, c01_pa: 50, bulk_modulus_pa: 1.0e+5, "
+                                  "density_kg_per_m3: 1050}\n",
+                              "inline", kData)
+                      .scene;
+  EXPECT_FALSE(s.material_given);
+  ASSERT_EQ(s.materials.size(), 2u);
+  EXPECT_EQ(s.materials[0].region, "wall");
+  EXPECT_DOUBLE_EQ(s.materials[0].material.youngs_modulus_pa, 20000);
+  EXPECT_EQ(s.materials[0].where.line, 3);
+  EXPECT_EQ(s.materials[1].region, "3");
+  EXPECT_EQ(s.materials[1].material.model, MaterialModel::mooney_rivlin);
+  EXPECT_DOUBLE_EQ(s.materials[1].material.density_kg_per_m3, 1050);
+  const auto keys_of_errors = [&](const std::string& materials) {
+    std::vector<std::string> keys;
+    try {
+      parse_scene(mesh + materials, "inline", kData);
+    } catch (const SceneError& e) {
+      for (const auto& d : e.diagnostics())
+        if (d.severity == Diagnostic::Severity::error) keys.push_back(d.key);
+    }
+    return keys;
+  };
+  using Keys = std::vector<std::string>;
+  EXPECT_EQ(keys_of_errors("materials:\n  wall: {model: neo_hookean, youngs_modulus_pa: 1, poisson_ratio: 0.5}\n"),
+            Keys{"materials.wall.poisson_ratio"});
+  EXPECT_EQ(keys_of_errors("materials:\n  wall: {model: neo_hookean, youngs_modulus_pa: 1, poisson_ratio: 0.3}\n"
+                           "  wall: {model: neo_hookean, youngs_modulus_pa: 2, poisson_ratio: 0.3}\n"),
+            Keys{"materials.wall"});  // a duplicate
+  EXPECT_EQ(keys_of_errors("materials: [wall]\n"), Keys{"materials"});
+  EXPECT_EQ(keys_of_errors("materials: {}\n"), Keys{"materials"});
+  EXPECT_EQ(keys_of_errors(""), Keys{"material"});  // neither: the material is missing
+}
+
 TEST(SceneLoader, EmptyAndMissingFilesAreErrors) {
   EXPECT_THROW(parse_scene("", "empty.yaml", kData), SceneError);
   EXPECT_THROW(parse_scene("# only a comment\n", "empty.yaml", kData), SceneError);
