@@ -3,7 +3,9 @@
 #include <mpi.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <cstdlib>
 #include <functional>
 #include <iostream>
@@ -14,6 +16,7 @@
 #include "config/scene_loader.h"
 #include "imaging/phantom.h"
 #include "imaging/volume_io.h"
+#include "meshes/mesh_regions.h"
 
 namespace fetouch::app {
 
@@ -40,6 +43,10 @@ std::string cache_key(const config::MeshSpec& spec) {
   key << '|' << m.target_size_m << '|' << m.fetus << '|' << (m.threshold ? *m.threshold : -1.0) << '|'
       << static_cast<int>(m.smoothing) << '|' << m.smoothing_sigma_m << '|' << m.closing_voxels << '|';
   for (int l : m.labels) key << l << ',';
+  for (const auto& [name, labels] : m.regions) {
+    key << '|' << name << '=';
+    for (int l : labels) key << l << ',';
+  }
   if (m.refine_center_m)
     key << '|' << (*m.refine_center_m)[0] << ',' << (*m.refine_center_m)[1] << ',' << (*m.refine_center_m)[2] << ','
         << m.refine_radius_m << ',' << m.refine_size_m;
@@ -81,7 +88,15 @@ void mesh_into(const config::MeshSpec& spec, const fs::path& file) {
     settings.refine_radius_mm = m.refine_radius_m * 1e3, settings.refine_size_mm = m.refine_size_m * 1e3;
   }
   settings.progress = [](const std::string& step, double) { log::detail() << "meshing: " << step; };
-  const meshes::VolumeMesh mesh = meshes::mesh_mask(input, settings);
+  meshes::VolumeMesh mesh = meshes::mesh_mask(input, settings);
+  if (!m.regions.empty()) {  // each element in the region of the label map covering most of it
+    std::vector<meshes::MeshRegion> regions;
+    for (const auto& [name, labels] : m.regions) regions.push_back({name, labels});
+    meshes::assign_regions(mesh, label_map(volume), regions);
+    for (const auto& r : mesh.regions)
+      log::info() << "region " << r.name << ": " << r.tetrahedra << " tetrahedra, volume " << 100 * (r.volume_m3 / r.voxel_volume_m3 - 1)
+                  << " % off its voxels', smallest dihedral angle " << r.min_dihedral_deg << " deg";
+  }
   if (mesh.quality.inverted + mesh.quality.degenerate > 0 || !mesh.closed_manifold)
     throw std::runtime_error("the mesh has inverted or degenerate elements or an open boundary");
   fs::create_directories(file.parent_path());
@@ -108,6 +123,16 @@ meshes::MaskVolume mask_volume(const imaging::Mask& mask) {
   meshes::MaskVolume out;
   out.dimensions = mask.dimensions, out.spacing_mm = mask.spacing_mm, out.origin_mm = mask.origin_mm;
   out.direction = mask.direction, out.data = mask.data;
+  return out;
+}
+
+meshes::MaskVolume label_map(const imaging::Volume<float>& volume) {
+  meshes::MaskVolume out;
+  out.dimensions = volume.dimensions, out.spacing_mm = volume.spacing_mm;
+  out.origin_mm = volume.origin_mm, out.direction = volume.direction;
+  out.data.resize(volume.data.size());
+  for (std::size_t i = 0; i < volume.data.size(); ++i)
+    out.data[i] = static_cast<std::uint8_t>(std::clamp(std::lround(volume.data[i]), 0L, 255L));
   return out;
 }
 

@@ -29,5 +29,7 @@ std::filesystem::path mesh_cache_dir();
 
 // A segmentation as the mesher takes it: the same voxels, spacing, origin and direction.
 meshes::MaskVolume mask_volume(const imaging::Mask& mask);
+// A label map's values as labels 0..255 (rounded, clamped), on the volume's grid.
+meshes::MaskVolume label_map(const imaging::Volume<float>& volume);
 
 }  // namespace fetouch::app

@@ -9,6 +9,7 @@
 #include <filesystem>
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace fetouch::config {
@@ -34,6 +35,8 @@ enum class SmoothingFilter { none, gaussian, median };
 struct MeshingOptions {
   double target_size_m = 4e-3;
   std::vector<int> labels;          // a label map: these labels are the tissue
+  // A label map in regions (`fetouch mesh --regions`): name and labels; their union is `labels`.
+  std::vector<std::pair<std::string, std::vector<int>>> regions;
   bool fetus = false;               // the fetal segmentation pipeline
   std::optional<double> threshold;  // intensity; absent: halfway between the 5th and 95th percentiles
   SmoothingFilter smoothing = SmoothingFilter::gaussian;

@@ -111,31 +111,56 @@ void read_generated(MapView& parent, GeneratedMesh& out) {
 void read_meshing(MapView& parent, MeshingOptions& out) {
   const Entry e = parent.entry("meshing");
   MapView map(parent.reader(), e.value, e.path, e.key_mark,
-              {"target_size_m", "labels", "fetus", "threshold", "smoothing", "smoothing_sigma_m", "closing_voxels",
-               "refine"});
+              {"target_size_m", "labels", "regions", "fetus", "threshold", "smoothing", "smoothing_sigma_m",
+               "closing_voxels", "refine"});
   if (!map.valid()) return;
   map.number("target_size_m", out.target_size_m, Range::positive());
   if (map.has("threshold")) {
     double threshold = 0;
     if (map.number("threshold", threshold, Range::any())) out.threshold = threshold;
   }
-  if (map.has("labels")) {
-    const Entry labels = map.entry("labels");
+  // A list of labels such as [3, 4, 5, 6] (whole numbers in low..high).
+  const auto label_list = [&](const Entry& labels, int high, std::vector<int>& into) {
     if (!labels.value.IsSequence() || labels.value.size() == 0) {
       map.reader().error(labels.value_mark, labels.path,
                          "expected a list of labels such as [3, 4, 5, 6], found " + detail::describe_node(labels.value));
+      return;
+    }
+    for (std::size_t i = 0; i < labels.value.size(); ++i) {
+      Entry item = labels;
+      item.value.reset(labels.value[i]);
+      item.value_mark = labels.value[i].Mark();
+      item.path = labels.path + "[" + std::to_string(i) + "]";
+      const auto x = detail::read_number(map.reader(), item);
+      if (!x) continue;
+      if (*x != std::floor(*x) || *x < 0 || *x > high)
+        map.reader().error(item.value_mark, item.path,
+                           "a label is a whole number from 0 to " + std::to_string(high) + ", not " + format_number(*x));
+      else
+        into.push_back(static_cast<int>(*x));
+    }
+  };
+  if (map.has("labels")) label_list(map.entry("labels"), 65535, out.labels);
+  if (map.has("regions")) {  // name: [labels]; their union is the tissue
+    const Entry regions = map.entry("regions");
+    std::vector<std::string> names;
+    if (regions.value.IsMap())
+      for (auto it = regions.value.begin(); it != regions.value.end(); ++it)
+        if (it->first.IsScalar()) names.push_back(it->first.Scalar());
+    if (names.empty()) {
+      map.reader().error(regions.value_mark, regions.path,
+                         "expected region names with their labels, such as {wall: [1], fluid: [2], fetus: [3, 4, 5, 6]}");
+    } else if (map.has("labels")) {
+      map.reader().error(regions.key_mark, regions.path, "give labels or regions, not both (the regions' labels are the tissue)");
     } else {
-      for (std::size_t i = 0; i < labels.value.size(); ++i) {
-        Entry item = labels;
-        item.value.reset(labels.value[i]);
-        item.value_mark = labels.value[i].Mark();
-        item.path = labels.path + "[" + std::to_string(i) + "]";
-        const auto x = detail::read_number(map.reader(), item);
-        if (!x) continue;
-        if (*x != std::floor(*x) || *x < 0 || *x > 65535)
-          map.reader().error(item.value_mark, item.path, "a label is a whole number from 0 to 65535, not " + std::to_string(*x));
-        else
-          out.labels.push_back(static_cast<int>(*x));
+      MapView named(map.reader(), regions.value, regions.path, regions.key_mark, names);
+      for (const std::string& name : names) {
+        if (!named.has(name) || std::any_of(out.regions.begin(), out.regions.end(), [&](const auto& r) { return r.first == name; }))
+          continue;
+        std::vector<int> labels;
+        label_list(named.entry(name), 255, labels);
+        out.regions.emplace_back(name, labels);
+        out.labels.insert(out.labels.end(), labels.begin(), labels.end());
       }
     }
   }

@@ -155,7 +155,7 @@ TissueMeshInfo build_tissue_mesh(const config::MeshSpec& spec, Triangulation<3>&
     case config::MeshSource::file: {
       const std::string file = spec.path.string();
       if (spec.path.extension() == ".vtu") {
-        info.boundary_ids = read_vtu_mesh(file, tria);
+        info.boundary_ids = read_vtu_mesh(file, tria, &volume_names);
         break;
       }
       if (spec.path.extension() != ".msh")

@@ -43,7 +43,8 @@ double signed_volume(const std::vector<Point<3>>& v, const std::vector<unsigned 
 
 }  // namespace
 
-std::map<std::string, unsigned int> read_vtu_mesh(const std::string& path, dealii::Triangulation<3>& tria) {
+std::map<std::string, unsigned int> read_vtu_mesh(const std::string& path, dealii::Triangulation<3>& tria,
+                                                  std::map<unsigned int, std::string>* region_names) {
   if (!std::filesystem::is_regular_file(path)) throw std::runtime_error(path + ": no such file");
   auto reader = vtkSmartPointer<vtkXMLUnstructuredGridReader>::New();
   reader->SetFileName(path.c_str());
@@ -152,6 +153,10 @@ std::map<std::string, unsigned int> read_vtu_mesh(const std::string& path, deali
       name = labels->GetValue(id);
     names[name] = id;
   }
+  if (region_names)
+    if (auto* regions = vtkStringArray::SafeDownCast(grid->GetFieldData()->GetAbstractArray("region_names")))
+      for (vtkIdType id = 0; id < regions->GetNumberOfValues(); ++id)
+        if (!regions->GetValue(id).empty()) (*region_names)[static_cast<unsigned int>(id)] = regions->GetValue(id);
   return names;
 }
 

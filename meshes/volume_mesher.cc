@@ -374,22 +374,34 @@ void write_volume_mesh(const VolumeMesh& mesh, const std::filesystem::path& path
     boundary->SetName("boundary_id");
     auto material = vtkSmartPointer<vtkIntArray>::New();
     material->SetName("material_id");
-    for (const auto& t : mesh.tetrahedra) {
+    // Regions: material id r + 1 (as the .msh's volume groups), boundary id r (NAME_outer).
+    const bool regions = !mesh.region_names.empty();
+    for (std::size_t k = 0; k < mesh.tetrahedra.size(); ++k) {
+      const auto& t = mesh.tetrahedra[k];
       const vtkIdType v[4] = {t[0], t[1], t[2], t[3]};
       grid->InsertNextCell(VTK_TETRA, 4, v);
-      boundary->InsertNextValue(-1), material->InsertNextValue(0);
+      boundary->InsertNextValue(-1), material->InsertNextValue(regions ? mesh.region[k] + 1 : 0);
     }
-    for (const auto& t : mesh.boundary) {
+    for (std::size_t k = 0; k < mesh.boundary.size(); ++k) {
+      const auto& t = mesh.boundary[k];
       const vtkIdType v[3] = {t[0], t[1], t[2]};
       grid->InsertNextCell(VTK_TRIANGLE, 3, v);
-      boundary->InsertNextValue(0), material->InsertNextValue(-1);
+      boundary->InsertNextValue(regions ? mesh.boundary_region[k] : 0), material->InsertNextValue(-1);
     }
     grid->GetCellData()->AddArray(boundary);
     grid->GetCellData()->AddArray(material);
     auto names = vtkSmartPointer<vtkStringArray>::New();
     names->SetName("boundary_names");
-    names->InsertNextValue("surface");
+    if (!regions) names->InsertNextValue("surface");
+    for (const auto& region : mesh.region_names) names->InsertNextValue(region + "_outer");
     grid->GetFieldData()->AddArray(names);
+    if (regions) {  // entry i names material id i (0 unused)
+      auto region_names = vtkSmartPointer<vtkStringArray>::New();
+      region_names->SetName("region_names");
+      region_names->InsertNextValue("");
+      for (const auto& region : mesh.region_names) region_names->InsertNextValue(region);
+      grid->GetFieldData()->AddArray(region_names);
+    }
     auto writer = vtkSmartPointer<vtkXMLUnstructuredGridWriter>::New();
     writer->SetFileName(name.c_str());
     writer->SetInputData(grid);
@@ -399,8 +411,14 @@ void write_volume_mesh(const VolumeMesh& mesh, const std::filesystem::path& path
   if (e != ".msh") throw std::runtime_error(name + ": meshes are written as .msh or .vtu");
   GmshSession session;
   gmsh::model::add("tissue");
-  gmsh::model::addDiscreteEntity(2, 1);
-  gmsh::model::addDiscreteEntity(3, 1, {1});
+  // One discrete volume per region (tag r + 1) and its outer surface (tag r + 1); one of each, named
+  // `tissue` and `surface`, without regions.
+  const bool regions = !mesh.region_names.empty();
+  const int n = regions ? static_cast<int>(mesh.region_names.size()) : 1;
+  for (int r = 1; r <= n; ++r) {
+    gmsh::model::addDiscreteEntity(2, r);
+    gmsh::model::addDiscreteEntity(3, r, {r});
+  }
   std::vector<std::size_t> tags(mesh.nodes_m.size());
   std::vector<double> xyz;
   for (std::size_t i = 0; i < tags.size(); ++i) {
@@ -408,15 +426,19 @@ void write_volume_mesh(const VolumeMesh& mesh, const std::filesystem::path& path
     xyz.insert(xyz.end(), mesh.nodes_m[i].begin(), mesh.nodes_m[i].end());
   }
   gmsh::model::mesh::addNodes(3, 1, tags, xyz);
-  std::vector<std::size_t> tri, tet;
-  for (const auto& t : mesh.boundary) for (int v : t) tri.push_back(std::size_t(v) + 1);
-  for (const auto& t : mesh.tetrahedra) for (int v : t) tet.push_back(std::size_t(v) + 1);
-  gmsh::model::mesh::addElementsByType(1, 2, {}, tri);
-  gmsh::model::mesh::addElementsByType(1, 4, {}, tet);
-  gmsh::model::addPhysicalGroup(2, {1}, 1);
-  gmsh::model::setPhysicalName(2, 1, "surface");
-  gmsh::model::addPhysicalGroup(3, {1}, 2);
-  gmsh::model::setPhysicalName(3, 2, "tissue");
+  std::vector<std::vector<std::size_t>> tri(static_cast<std::size_t>(n)), tet(static_cast<std::size_t>(n));
+  for (std::size_t k = 0; k < mesh.boundary.size(); ++k)
+    for (int v : mesh.boundary[k]) tri[regions ? std::size_t(mesh.boundary_region[k]) : 0].push_back(std::size_t(v) + 1);
+  for (std::size_t k = 0; k < mesh.tetrahedra.size(); ++k)
+    for (int v : mesh.tetrahedra[k]) tet[regions ? std::size_t(mesh.region[k]) : 0].push_back(std::size_t(v) + 1);
+  for (int r = 1; r <= n; ++r) {
+    gmsh::model::mesh::addElementsByType(r, 2, {}, tri[std::size_t(r - 1)]);
+    gmsh::model::mesh::addElementsByType(r, 4, {}, tet[std::size_t(r - 1)]);
+    const std::string group = regions ? mesh.region_names[std::size_t(r - 1)] : "tissue";
+    // Volume groups 1..n are the regions (material ids); surface groups 1..n their outer surfaces.
+    gmsh::model::setPhysicalName(2, gmsh::model::addPhysicalGroup(2, {r}, regions ? r : 1), regions ? group + "_outer" : "surface");
+    gmsh::model::setPhysicalName(3, gmsh::model::addPhysicalGroup(3, {r}, regions ? r : 2), group);
+  }
   if (partitions > 1) gmsh::model::mesh::partition(partitions);
   gmsh::option::setNumber("Mesh.MshFileVersion", 4.1);
   try {

@@ -54,6 +54,19 @@ struct VolumeMesh {
   bool closed_manifold = false;
   bool surface_remeshed = false;  // Gmsh parametrised and remeshed the surface (else kept as decimated)
   SliverRepair repair;            // what the sliver repair did after Gmsh
+  // Regions (mesh_regions.h; empty: one region, `tissue`): names, each tetrahedron's index into
+  // them, and per region its elements, volume against its voxels', quality and outer surface.
+  struct RegionReport {
+    std::string name;
+    long tetrahedra = 0, outer_triangles = 0;
+    double volume_m3 = 0, voxel_volume_m3 = 0;
+    double min_dihedral_deg = 0;
+  };
+  std::vector<std::string> region_names;
+  std::vector<int> region;           // per tetrahedron
+  std::vector<int> boundary_region;  // per boundary triangle: its element's region
+  std::vector<RegionReport> regions;
+  long interface_triangles = 0;  // faces shared by elements of two regions
 };
 
 // Throws std::runtime_error: an empty mask, a surface that is not closed or not manifold after

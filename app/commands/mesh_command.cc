@@ -2,6 +2,7 @@
 // (imaging/segmentation.h, meshes/volume_mesher.h), as .msh 4.1 and .vtu, with a quality report.
 #include <CLI/CLI.hpp>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -18,6 +19,7 @@
 #include "app/scene_mesh.h"
 #include "imaging/segmentation.h"
 #include "imaging/volume_io.h"
+#include "meshes/mesh_regions.h"
 #include "meshes/volume_mesher.h"
 
 namespace fetouch::app {
@@ -29,6 +31,7 @@ namespace fs = std::filesystem;
 struct MeshOptions {
   std::string volume, out = "tissue.msh";
   std::vector<int> labels;        // label map: these labels are the tissue
+  std::vector<std::string> regions;  // label map: NAME=L1,L2 ... (their union is the tissue)
   bool fetus = false;             // the fetal segmentation pipeline
   float threshold = -1;           // intensity threshold (default: halfway between the 5th and 95th percentiles)
   std::string smoothing = "gaussian";
@@ -48,13 +51,29 @@ int run_mesh(const MeshOptions& o) {
     return kExitBadInput;
   }
   meshes::VolumeMesh mesh;
-  meshes::MaskVolume mask;
+  meshes::MaskVolume mask, labels_in_regions;
+  std::vector<meshes::MeshRegion> regions;
+  std::vector<int> labels = o.labels;
+  try {
+    for (const std::string& text : o.regions) {
+      regions.push_back(meshes::parse_region(text));
+      labels.insert(labels.end(), regions.back().labels.begin(), regions.back().labels.end());
+    }
+  } catch (const std::invalid_argument& e) {
+    std::cerr << "error: --regions " << e.what() << "\n";
+    return kExitBadInput;
+  }
+  if (!regions.empty() && (o.fetus || !o.labels.empty())) {
+    std::cerr << "error: --regions takes the labels of a label map itself; drop --labels and --fetus\n";
+    return kExitBadInput;
+  }
   try {
     log::info() << "reading " << o.volume;
     const imaging::Volume<float> volume = imaging::read_volume(o.volume);
+    if (!regions.empty()) labels_in_regions = label_map(volume);  // the label map itself
     log::info() << "segmenting";
     imaging::TissueSegmentation segmentation;
-    segmentation.labels = o.labels, segmentation.fetus = o.fetus, segmentation.smoothing_mm = o.smoothing_mm;
+    segmentation.labels = labels, segmentation.fetus = o.fetus, segmentation.smoothing_mm = o.smoothing_mm;
     segmentation.closing = o.closing;
     if (o.threshold >= 0) segmentation.threshold = o.threshold;
     if (o.smoothing == "none") segmentation.smoothing = imaging::TissueSegmentation::Smoothing::none;
@@ -79,6 +98,7 @@ int run_mesh(const MeshOptions& o) {
       progress.update(static_cast<long>(100 * done));
     };
     mesh = meshes::mesh_mask(mask, settings);
+    if (!regions.empty()) meshes::assign_regions(mesh, labels_in_regions, regions);
     progress.finish();
   } catch (const std::exception& e) {
     std::cerr << "error: " << o.volume << ": " << e.what() << "\n";
@@ -133,6 +153,19 @@ int run_mesh(const MeshOptions& o) {
   json.key("relocated").value(mesh.repair.relocated);
   json.end_object();
   json.key("surface_remeshed").value(mesh.surface_remeshed);
+  json.key("regions").begin_array();
+  for (const auto& r : mesh.regions) {
+    json.begin_object();
+    json.key("name").value(r.name);
+    json.key("tetrahedra").value(r.tetrahedra);
+    json.key("volume_m3").value(r.volume_m3);
+    json.key("voxel_volume_m3").value(r.voxel_volume_m3);
+    json.key("min_dihedral_deg").value(r.min_dihedral_deg);
+    json.key("outer_triangles").value(r.outer_triangles);
+    json.end_object();
+  }
+  json.end_array();
+  json.key("interface_triangles").value(mesh.interface_triangles);
   json.key("seconds").value(seconds);
   json.end_object();
   if (o.json) {
@@ -148,6 +181,11 @@ int run_mesh(const MeshOptions& o) {
     const auto& r = mesh.repair;
     std::printf("  sliver repair: smallest dihedral %.1f -> %.1f deg (%d peeled, %d 2-3 and %d 3-2 flips, %d nodes moved)\n",
                 r.min_dihedral_before_deg, r.min_dihedral_after_deg, r.peeled, r.flips23, r.flips32, r.relocated);
+    for (const auto& region : mesh.regions)
+      std::printf("  region %s: %ld tetrahedra, %.4g ml against %.4g ml of voxels (%+.2f %%), smallest dihedral %.1f deg, %ld outer triangles\n",
+                  region.name.c_str(), region.tetrahedra, region.volume_m3 * 1e6, region.voxel_volume_m3 * 1e6,
+                  100 * (region.volume_m3 / region.voxel_volume_m3 - 1), region.min_dihedral_deg, region.outer_triangles);
+    if (!mesh.regions.empty()) std::printf("  %ld interface triangles between regions\n", mesh.interface_triangles);
     std::printf("  wrote %s and %s (open the .vtu in ParaView)\n", msh.string().c_str(), vtu.string().c_str());
   }
   if (std::abs(volume_error) > 0.03)
@@ -168,10 +206,17 @@ void add_mesh_command(CLI::App& parent, int& exit_code) {
       "--size, optimises them and reports their quality. Writes MESH.msh (4.1; physical groups\n"
       "`surface` and `tissue`) and MESH.vtu, in metres. Exit 0 when no element is inverted or\n"
       "degenerate and the boundary is closed and manifold.\n"
-      "Example: fetouch mesh phantom/phantom_labels.mha --labels 3 4 5 6 --size 3 --out fetus.msh");
+      "With --regions, one mesh of the regions' union whose elements each take the region covering most\n"
+      "of them (the regions share their interfaces node for node; an interface follows element faces),\n"
+      "volume groups named as given, surface groups NAME_outer, and a report per region.\n"
+      "Example: fetouch mesh phantom/phantom_labels.mha --labels 3 4 5 6 --size 3 --out fetus.msh\n"
+      "         fetouch mesh phantom/phantom_labels.mha --regions wall=1 fluid=2 fetus=3,4,5,6 --size 4");
   cmd->add_option("volume", o->volume, "Volume (.mha, .mhd, .vti, .nrrd)")->required()->check(CLI::ExistingFile);
   cmd->add_option("--out", o->out, "Mesh file (.msh or .vtu; both are written)")->capture_default_str();
   cmd->add_option("--labels", o->labels, "The labels that make the tissue (label maps)");
+  cmd->add_option("--regions", o->regions,
+                  "Regions of a label map, NAME=L1,L2 each: one conforming mesh of their union, each element in the "
+                  "region covering most of it (volume groups NAME, surfaces NAME_outer)");
   cmd->add_flag("--fetus", o->fetus, "Segment the fetus of a fetal ultrasound volume");
   cmd->add_option("--threshold", o->threshold, "Intensity threshold (default: between the 5th and 95th percentiles)");
   cmd->add_option("--smoothing", o->smoothing, "Speckle filter before the threshold: none, gaussian or median (3x3x3)")

@@ -164,6 +164,25 @@ TEST(SceneLoader, MaterialsPerRegion) {
   EXPECT_EQ(keys_of_errors(""), Keys{"material"});  // neither: the material is missing
 }
 
+// mesh.meshing.regions: names with their labels, whose union becomes the tissue's labels.
+TEST(SceneLoader, MeshingRegions) {
+  const auto scene = [&](const std::string& meshing) {
+    return parse_scene("mesh:\n  phantom: {seed: 1}\n  meshing: " + meshing +
+                           "\nmaterial: {model: neo_hookean, youngs_modulus_pa: 5000, poisson_ratio: 0.45}\n",
+                       "inline", kData)
+        .scene;
+  };
+  const Scene s = scene("{regions: {wall: [1], fluid: [2], fetus: [3, 4, 5, 6]}}");
+  ASSERT_EQ(s.mesh.meshing.regions.size(), 3u);
+  EXPECT_EQ(s.mesh.meshing.regions[2].first, "fetus");
+  EXPECT_EQ(s.mesh.meshing.regions[2].second, (std::vector<int>{3, 4, 5, 6}));
+  EXPECT_EQ(s.mesh.meshing.labels, (std::vector<int>{1, 2, 3, 4, 5, 6}));
+  EXPECT_THROW(scene("{regions: {wall: [1], fluid: [256]}}"), SceneError);
+  EXPECT_THROW(scene("{regions: [1, 2]}"), SceneError);
+  EXPECT_THROW(scene("{labels: [1], regions: {wall: [1]}}"), SceneError);
+  EXPECT_THROW(scene("{regions: {wall: 1}}"), SceneError);
+}
+
 TEST(SceneLoader, EmptyAndMissingFilesAreErrors) {
   EXPECT_THROW(parse_scene("", "empty.yaml", kData), SceneError);
   EXPECT_THROW(parse_scene("# only a comment\n", "empty.yaml", kData), SceneError);

@@ -6,12 +6,14 @@
 #include <gmsh.h>
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <string>
 
 #include "config/scene_loader.h"
 #include "fem/tissue_model.h"
+#include "meshes/mesh_regions.h"
 
 namespace fetouch::fem {
 namespace {
@@ -133,6 +135,46 @@ TEST_F(RegionMaterials, MissingAndUnknownRegionsAreNamedWithTheirLine) {
   EXPECT_NE(unknown.find("did you mean 'soft'"), std::string::npos) << unknown;
   // Neither `material:` nor `materials:`: the loader says so.
   EXPECT_THROW(config::parse_scene(bar_scene(*mesh_, ""), "bar.yaml", "."), config::SceneError);
+}
+
+// `fetouch mesh --regions` output read back by the solver: a ball (label 2) in a shell (label 1),
+// written as .msh and as .vtu; deal.II sees the regions by name with the mesher's cells and volumes,
+// and a scene gives each its material by that name.
+TEST(MeshedRegions, RegionsOfTheMesherAreTheSolversByName) {
+  meshes::MaskVolume map;
+  map.dimensions = {60, 60, 60};
+  map.data.assign(60 * 60 * 60, 0);
+  for (int k = 0; k < 60; ++k)
+    for (int j = 0; j < 60; ++j)
+      for (int i = 0; i < 60; ++i) {
+        const double r = std::sqrt((i - 30.0) * (i - 30.0) + (j - 30.0) * (j - 30.0) + (k - 30.0) * (k - 30.0));
+        map.data[(std::size_t(k) * 60 + j) * 60 + i] = r < 10 ? 2 : r < 22 ? 1 : 0;
+      }
+  meshes::MaskVolume mask = map;
+  for (auto& v : mask.data) v = v != 0;
+  meshes::MeshingSettings settings;
+  settings.element_size_mm = 5;
+  meshes::VolumeMesh mesh = meshes::mesh_mask(mask, settings);
+  meshes::assign_regions(mesh, map, {meshes::parse_region("shell=1"), meshes::parse_region("ball=2")});
+  for (const char* extension : {".msh", ".vtu"}) {
+    const fs::path file = fs::temp_directory_path() / (std::string("fetouch_meshed_regions") + extension);
+    meshes::write_volume_mesh(mesh, file);
+    auto m = model("name: r\nmesh: {file: " + file.string() + ", element: p1}\n"
+                   "materials:\n"
+                   "  shell: {model: neo_hookean, youngs_modulus_pa: 2000, poisson_ratio: 0.45}\n"
+                   "  ball: {model: neo_hookean, youngs_modulus_pa: 60000, poisson_ratio: 0.45}\n"
+                   "boundary:\n  - {name: skin, type: fixed, select: {physical_group: shell_outer}}\n");
+    fs::remove(file);
+    ASSERT_EQ(m->mesh.regions.size(), 2u) << extension;
+    for (int r = 0; r < 2; ++r) {
+      EXPECT_EQ(m->mesh.regions[r].name, mesh.regions[r].name) << extension;
+      EXPECT_EQ(m->mesh.regions[r].material_id, unsigned(r + 1)) << extension;
+      EXPECT_EQ(long(m->mesh.regions[r].cells), mesh.regions[r].tetrahedra) << extension;
+      EXPECT_NEAR(m->mesh.regions[r].volume_m3, mesh.regions[r].volume_m3, 1e-12) << extension;
+    }
+    EXPECT_DOUBLE_EQ(m->region_materials.at(2)->shear_modulus(), lame_mu(60000, 0.45)) << extension;
+    EXPECT_EQ(m->region_faces.at("skin"), static_cast<unsigned int>(mesh.boundary.size())) << extension;
+  }
 }
 
 }  // namespace

@@ -1,0 +1,162 @@
+#include "meshes/mesh_regions.h"
+
+#include <algorithm>
+#include <cctype>
+#include <cmath>
+#include <map>
+#include <stdexcept>
+
+namespace fetouch::meshes {
+
+MeshRegion parse_region(const std::string& text) {
+  const auto bad = [&](const std::string& why) {
+    return std::invalid_argument("region '" + text + "': " + why + " (expected NAME=LABEL[,LABEL...], e.g. fetus=3,4,5,6)");
+  };
+  const std::size_t equals = text.find('=');
+  if (equals == std::string::npos) throw bad("no '='");
+  MeshRegion region;
+  region.name = text.substr(0, equals);
+  if (region.name.empty()) throw bad("no name");
+  for (const char c : region.name)
+    if (!std::isalnum(static_cast<unsigned char>(c)) && c != '_' && c != '-') throw bad("a name of letters, digits, '_' and '-' only");
+  std::string rest = text.substr(equals + 1);
+  std::size_t start = 0;
+  while (start <= rest.size()) {
+    const std::size_t comma = std::min(rest.find(',', start), rest.size());
+    const std::string word = rest.substr(start, comma - start);
+    std::size_t used = 0;
+    int label = -1;
+    try {
+      label = std::stoi(word, &used);
+    } catch (const std::exception&) {
+    }
+    if (word.empty() || used != word.size() || label < 1 || label > 255) throw bad("label '" + word + "' is not a whole number in 1..255");
+    region.labels.push_back(label);
+    start = comma + 1;
+  }
+  return region;
+}
+
+namespace {
+
+// The label map's voxel containing a point (mm), or -1 outside the grid.
+struct LabelLookup {
+  const MaskVolume& v;
+  long index(const std::array<double, 3>& x_mm, std::array<int, 3>* ijk = nullptr) const {
+    std::array<int, 3> at{};
+    for (int c = 0; c < 3; ++c) {
+      double t = 0;  // (D' (x - origin))_c / spacing_c
+      for (int r = 0; r < 3; ++r) t += v.direction[3 * r + c] * (x_mm[r] - v.origin_mm[r]);
+      at[c] = static_cast<int>(std::lround(t / v.spacing_mm[c]));
+      if (at[c] < 0 || at[c] >= v.dimensions[c]) return -1;
+    }
+    if (ijk) *ijk = at;
+    return (long(at[2]) * v.dimensions[1] + at[1]) * v.dimensions[0] + at[0];
+  }
+};
+
+}  // namespace
+
+void assign_regions(VolumeMesh& mesh, const MaskVolume& labels, const std::vector<MeshRegion>& regions) {
+  std::array<int, 256> region_of_label;
+  region_of_label.fill(-1);
+  for (std::size_t r = 0; r < regions.size(); ++r)
+    for (const int label : regions[r].labels) {
+      if (region_of_label[label] >= 0)
+        throw std::invalid_argument("label " + std::to_string(label) + " is in regions " +
+                                    regions[std::size_t(region_of_label[label])].name + " and " + regions[r].name);
+      region_of_label[label] = static_cast<int>(r);
+    }
+  const LabelLookup lookup{labels};
+  const auto region_at = [&](const std::array<double, 3>& x_mm) {
+    const long i = lookup.index(x_mm);
+    return i < 0 ? -1 : region_of_label[labels.data[std::size_t(i)]];
+  };
+  // The nearest voxel of any region to a point, within 10 voxels (-1: none).
+  const auto nearest_region = [&](const std::array<double, 3>& x_mm) {
+    std::array<int, 3> c{};
+    if (lookup.index(x_mm, &c) < 0) return -1;
+    int best = -1;
+    long best_d2 = 1L << 40;
+    for (int radius = 1; radius <= 10 && best < 0; ++radius)
+      for (int k = c[2] - radius; k <= c[2] + radius; ++k)
+        for (int j = c[1] - radius; j <= c[1] + radius; ++j)
+          for (int i = c[0] - radius; i <= c[0] + radius; ++i) {
+            if (i < 0 || j < 0 || k < 0 || i >= labels.dimensions[0] || j >= labels.dimensions[1] || k >= labels.dimensions[2])
+              continue;
+            const int r = region_of_label[labels.data[(std::size_t(k) * labels.dimensions[1] + j) * labels.dimensions[0] + i]];
+            const long d2 = long(i - c[0]) * (i - c[0]) + long(j - c[1]) * (j - c[1]) + long(k - c[2]) * (k - c[2]);
+            if (r >= 0 && d2 < best_d2) best = r, best_d2 = d2;
+          }
+    return best;
+  };
+
+  const std::size_t n = regions.size();
+  mesh.region_names.clear();
+  for (const auto& r : regions) mesh.region_names.push_back(r.name);
+  mesh.region.assign(mesh.tetrahedra.size(), 0);
+  for (std::size_t t = 0; t < mesh.tetrahedra.size(); ++t) {
+    std::array<double, 3> centroid{0, 0, 0};
+    for (const int v : mesh.tetrahedra[t])
+      for (int c = 0; c < 3; ++c) centroid[c] += 0.25e3 * mesh.nodes_m[std::size_t(v)][c];
+    std::vector<int> votes(n, 0);
+    const int at_centroid = region_at(centroid);
+    if (at_centroid >= 0) ++votes[std::size_t(at_centroid)];
+    for (const int v : mesh.tetrahedra[t]) {
+      std::array<double, 3> x{};
+      for (int c = 0; c < 3; ++c) x[c] = 0.5 * (centroid[c] + 1e3 * mesh.nodes_m[std::size_t(v)][c]);
+      if (const int r = region_at(x); r >= 0) ++votes[std::size_t(r)];
+    }
+    const int most = *std::max_element(votes.begin(), votes.end());
+    const bool tie = std::count(votes.begin(), votes.end(), most) > 1;
+    int chosen = static_cast<int>(std::max_element(votes.begin(), votes.end()) - votes.begin());
+    if (most == 0 || (tie && (at_centroid < 0 || votes[std::size_t(at_centroid)] != most))) {
+      const int nearest = nearest_region(centroid);
+      if (nearest >= 0 && (most == 0 || votes[std::size_t(nearest)] == most)) chosen = nearest;
+    } else if (tie) {
+      chosen = at_centroid;
+    }
+    mesh.region[t] = chosen;
+  }
+
+  // The report: elements, volume against the voxels', quality; outer and interface faces.
+  mesh.regions.assign(n, {});
+  const double voxel_m3 = labels.spacing_mm[0] * labels.spacing_mm[1] * labels.spacing_mm[2] * 1e-9;
+  for (std::size_t r = 0; r < n; ++r) mesh.regions[r].name = regions[r].name, mesh.regions[r].min_dihedral_deg = 180;
+  for (const std::uint8_t label : labels.data)
+    if (region_of_label[label] >= 0) mesh.regions[std::size_t(region_of_label[label])].voxel_volume_m3 += voxel_m3;
+  std::map<std::array<int, 3>, int> face_owner;
+  mesh.interface_triangles = 0;
+  for (std::size_t t = 0; t < mesh.tetrahedra.size(); ++t) {
+    const Tet& tet = mesh.tetrahedra[t];
+    VolumeMesh::RegionReport& report = mesh.regions[std::size_t(mesh.region[t])];
+    ++report.tetrahedra;
+    const auto& p = mesh.nodes_m;
+    report.volume_m3 += tet_signed_volume(p[std::size_t(tet[0])], p[std::size_t(tet[1])], p[std::size_t(tet[2])], p[std::size_t(tet[3])]);
+    report.min_dihedral_deg = std::min(report.min_dihedral_deg, min_dihedral_deg(p, tet));
+    for (int f = 0; f < 4; ++f) {
+      std::array<int, 3> face{tet[(f + 1) % 4], tet[(f + 2) % 4], tet[(f + 3) % 4]};
+      std::sort(face.begin(), face.end());
+      const auto [it, inserted] = face_owner.emplace(face, static_cast<int>(t));
+      if (!inserted) {
+        mesh.interface_triangles += mesh.region[std::size_t(it->second)] != mesh.region[t];
+        face_owner.erase(it);
+      }
+    }
+  }
+  mesh.boundary_region.assign(mesh.boundary.size(), 0);
+  for (std::size_t b = 0; b < mesh.boundary.size(); ++b) {
+    std::array<int, 3> face = mesh.boundary[b];
+    std::sort(face.begin(), face.end());
+    const auto it = face_owner.find(face);
+    if (it == face_owner.end()) throw std::logic_error("a boundary triangle is no element's face");
+    mesh.boundary_region[b] = mesh.region[std::size_t(it->second)];
+    ++mesh.regions[std::size_t(mesh.boundary_region[b])].outer_triangles;
+  }
+  for (const auto& report : mesh.regions)
+    if (report.tetrahedra == 0)
+      throw std::runtime_error("region " + report.name + " got no element at this element size (" +
+                               std::to_string(report.voxel_volume_m3 * 1e6) + " cm^3 of voxels): mesh finer or merge it");
+}
+
+}  // namespace fetouch::meshes
