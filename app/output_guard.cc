@@ -1,5 +1,10 @@
 #include "app/output_guard.h"
 
+#include <unistd.h>
+
+#include <cerrno>
+#include <cstring>
+#include <fstream>
 #include <stdexcept>
 
 namespace fetouch::app {
@@ -27,6 +32,42 @@ void refuse_overwriting(const std::vector<fs::path>& written, const std::vector<
       throw std::invalid_argument("--out: the folder " + folder.string() + " holds " + role + " " + input.string() +
                                   ", which this command would overwrite; choose another output folder");
   }
+}
+
+fs::path partial_path(const fs::path& path) {
+  fs::path partial = path;
+  partial.replace_filename(path.stem().string() + ".partial" + path.extension().string());
+  return partial;
+}
+
+void replace_when_written(const fs::path& path, const std::function<void(const fs::path&)>& write) {
+  // A detached header names its data file by its own name, which a rename would not follow.
+  if (path.extension() == ".mhd" || path.extension() == ".nhdr") return write(path);
+  // The process id keeps two commands writing the same output from sharing a temporary file.
+  fs::path temporary = path;
+  temporary.replace_filename("." + path.stem().string() + ".writing" + std::to_string(::getpid()) + path.extension().string());
+  try {
+    write(temporary);
+  } catch (...) {
+    std::error_code ignored;
+    fs::remove(temporary, ignored);
+    throw;
+  }
+  std::error_code error;
+  fs::rename(temporary, path, error);
+  if (error) {
+    fs::remove(temporary, error);
+    throw std::runtime_error(path.string() + ": cannot be written (" + error.message() + ")");
+  }
+}
+
+void write_text_file(const fs::path& path, const std::string& text) {
+  replace_when_written(path, [&](const fs::path& temporary) {
+    std::ofstream out(temporary, std::ios::binary);
+    out << text;
+    out.close();
+    if (!out) throw std::runtime_error(path.string() + ": cannot be written (" + std::strerror(errno) + ")");
+  });
 }
 
 }  // namespace fetouch::app

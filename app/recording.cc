@@ -1,5 +1,7 @@
 #include "app/recording.h"
 
+#include "app/output_guard.h"
+
 #include <hdf5.h>
 
 #include <algorithm>
@@ -94,7 +96,8 @@ hid_t latest_format() {
 }  // namespace
 
 struct RecordingWriter::Impl {
-  std::string name;
+  std::string name;         // the partial file written to
+  std::filesystem::path to;  // where commit() puts it
   hid_t file = -1;
   struct DeviceSeries {
     std::unique_ptr<Series> time, position, velocity, force, proxy, penetration, normal_force, in_contact;
@@ -115,7 +118,8 @@ RecordingWriter::RecordingWriter(const std::filesystem::path& path, const Record
     : impl_(std::make_unique<Impl>()) {
   quiet_hdf5();
   Impl& r = *impl_;
-  r.name = path.string();
+  r.to = path;
+  r.name = partial_path(path).string();
   r.contacts = static_cast<int>(header.probes.size());
   const hid_t access = latest_format();
   r.file = H5Fcreate(r.name.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, access);
@@ -217,7 +221,26 @@ void RecordingWriter::append(const FrameRecord& f) {
   r.gains->append(gains, 1);
 }
 
-void RecordingWriter::flush() { check(H5Fflush(impl_->file, H5F_SCOPE_GLOBAL), impl_->name + ": cannot be flushed"); }
+void RecordingWriter::flush() {
+  if (impl_->file < 0) return;
+  check(H5Fflush(impl_->file, H5F_SCOPE_GLOBAL), impl_->name + ": cannot be flushed");
+}
+
+void RecordingWriter::commit() {
+  Impl& r = *impl_;
+  if (r.file < 0) return;
+  flush();
+  const std::string name = r.name;
+  r.devices.clear();  // every dataset closed before the file
+  r.frame.reset(), r.time.reset(), r.solve.reset(), r.residual.reset(), r.margin.reset(), r.iterations.reset();
+  r.converged.reset(), r.eigenvalues.reset(), r.gains.reset();
+  const herr_t closed = H5Fclose(r.file);
+  r.file = -1;
+  check(closed, name + ": cannot be closed");
+  std::error_code error;
+  std::filesystem::rename(name, r.to, error);
+  if (error) throw std::runtime_error(name + ": cannot be renamed to " + r.to.string() + " (" + error.message() + ")");
+}
 
 long RecordingWriter::samples(int device) const {
   return static_cast<long>(impl_->devices.at(static_cast<std::size_t>(device)).time->rows);

@@ -53,7 +53,10 @@ struct FrameRecord {
 
 class RecordingWriter {
  public:
-  // Creates (replaces) the file. Throws std::runtime_error naming it if it cannot be written.
+  // Writes DIR/STEM.partial.h5 (replacing an earlier partial file), which commit() renames to
+  // `path`: an earlier recording at `path` stays whole until the new one is complete, and a session
+  // that fails or is killed leaves what it recorded (flushed) in the partial file. Throws
+  // std::runtime_error naming the file if it cannot be written.
   RecordingWriter(const std::filesystem::path& path, const RecordingHeader& header);
   ~RecordingWriter();
   RecordingWriter(const RecordingWriter&) = delete;
@@ -63,6 +66,8 @@ class RecordingWriter {
   void append(const FrameRecord& frame);
   // Everything appended so far reaches the disk, consistently.
   void flush();
+  // Flushes, closes and puts the file in place (nothing can be appended after).
+  void commit();
   long samples(int device) const;
 
  private:

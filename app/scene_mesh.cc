@@ -143,11 +143,15 @@ fs::path mesh_cache_dir() {
   return fs::temp_directory_path() / "fetouch-cache";
 }
 
-config::MeshSpec mesh_scene_volume(const config::MeshSpec& spec) {
-  if (spec.source != config::MeshSource::volume && spec.source != config::MeshSource::phantom) return spec;
+fs::path cached_mesh_path(const config::MeshSpec& spec) {
   std::ostringstream name;
   name << "mesh-" << std::hex << std::hash<std::string>{}(cache_key(spec)) << ".vtu";
-  const fs::path file = mesh_cache_dir() / "meshes" / name.str();
+  return mesh_cache_dir() / "meshes" / name.str();
+}
+
+config::MeshSpec mesh_scene_volume(const config::MeshSpec& spec) {
+  if (spec.source != config::MeshSource::volume && spec.source != config::MeshSource::phantom) return spec;
+  const fs::path file = cached_mesh_path(spec);
   int initialised = 0, rank = 0, ranks = 1;
   MPI_Initialized(&initialised);
   if (initialised) MPI_Comm_rank(MPI_COMM_WORLD, &rank), MPI_Comm_size(MPI_COMM_WORLD, &ranks);

@@ -26,6 +26,8 @@ std::optional<config::Scene> load_scene_or_report(const std::string& file);
 config::MeshSpec mesh_scene_volume(const config::MeshSpec& spec);
 
 std::filesystem::path mesh_cache_dir();
+// Where the mesh of a volume or phantom spec is cached (whether it is there yet or not).
+std::filesystem::path cached_mesh_path(const config::MeshSpec& spec);
 
 // A segmentation as the mesher takes it: the same voxels, spacing, origin and direction.
 meshes::MaskVolume mask_volume(const imaging::Mask& mask);

@@ -130,7 +130,7 @@ class SessionBase {
   }
 
   SessionSummary finish() {
-    if (writer_) writer_->flush();
+    if (writer_) writer_->commit();
     spread(solve_times_, summary_.solve_p50_s, summary_.solve_p99_s, summary_.solve_max_s);
     return std::move(summary_);
   }

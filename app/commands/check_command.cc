@@ -18,6 +18,7 @@
 #include "app/json_writer.h"
 #include "app/log.h"
 #include "app/progress.h"
+#include "app/scene_mesh.h"
 #include "config/scene_loader.h"
 #include "fem/tissue_mesh.h"
 #include "imaging/volume_info.h"
@@ -97,21 +98,28 @@ void check_group_names(SceneReport& report, const std::map<std::string, unsigned
 void check_referenced_data(SceneReport& report) {
   const config::Scene& scene = *report.scene;
   const config::MeshSpec& mesh = scene.mesh;
+  // The mesh in deal.II: its boundary and volume regions against the names the scene uses.
+  const auto inspect = [&](const config::MeshSpec& spec) {
+    log::detail() << "building the mesh in deal.II";
+    report.tissue = fem::inspect_tissue_mesh(spec);
+    check_group_names(report, report.tissue->boundary_ids);
+    for (const config::Diagnostic& d : fem::assign_region_materials(scene, *report.tissue).problems)
+      report.errors.push_back(diagnostic_at(report.file, {d.line, d.column}, d.key, d.message));
+  };
   try {
-    if (mesh.source == config::MeshSource::volume) {
-      report.volume = imaging::read_volume_info(mesh.path);
+    if (mesh.source == config::MeshSource::volume) report.volume = imaging::read_volume_info(mesh.path);
+    if (mesh.source == config::MeshSource::volume || mesh.source == config::MeshSource::phantom) {
+      // Meshed when first used: once it has been, the cached mesh tells the regions.
+      config::MeshSpec cached = mesh;
+      cached.source = config::MeshSource::file, cached.path = cached_mesh_path(mesh);
+      if (std::filesystem::exists(cached.path)) inspect(cached);
       return;
     }
-    if (mesh.source == config::MeshSource::phantom) return;  // generated and meshed when first used
     if (mesh.source == config::MeshSource::file) {
       log::detail() << "reading " << mesh.path.string();
       report.mesh_file = meshes::read_mesh_summary(mesh.path);
     }
-    log::detail() << "building the mesh in deal.II";
-    report.tissue = fem::inspect_tissue_mesh(mesh);
-    check_group_names(report, report.tissue->boundary_ids);
-    for (const config::Diagnostic& d : fem::assign_region_materials(scene, *report.tissue).problems)
-      report.errors.push_back(diagnostic_at(report.file, {d.line, d.column}, d.key, d.message));
+    inspect(mesh);
   } catch (const std::exception& e) {
     report.errors.push_back(diagnostic_at(report.file, mesh.where,
                                           mesh.source == config::MeshSource::volume ? "mesh.volume"

@@ -13,6 +13,7 @@
 
 #include "app/commands/commands.h"
 #include "app/exit_codes.h"
+#include "app/output_guard.h"
 #include "app/json_writer.h"
 #include "app/log.h"
 #include "app/progress.h"
@@ -109,8 +110,8 @@ int run_mesh(const MeshOptions& o) {
   vtu.replace_extension(".vtu");
   try {
     if (out.has_parent_path()) fs::create_directories(out.parent_path());
-    meshes::write_volume_mesh(mesh, msh, o.partitions);
-    meshes::write_volume_mesh(mesh, vtu);
+    replace_when_written(msh, [&](const fs::path& to) { meshes::write_volume_mesh(mesh, to, o.partitions); });
+    replace_when_written(vtu, [&](const fs::path& to) { meshes::write_volume_mesh(mesh, to); });
   } catch (const std::exception& e) {
     std::cerr << "error: " << e.what() << "\n";
     return kExitFailure;

@@ -12,6 +12,7 @@
 
 #include "app/commands/commands.h"
 #include "app/exit_codes.h"
+#include "app/output_guard.h"
 #include "app/json_writer.h"
 #include "imaging/phantom.h"
 #include "imaging/volume_io.h"
@@ -60,8 +61,8 @@ int run_phantom(const PhantomOptions& o) {
       summary = dir / "summary.json";
   try {
     fs::create_directories(dir);
-    imaging::write_volume(phantom.image, image);
-    imaging::write_volume(phantom.labels, labels);
+    replace_when_written(image, [&](const fs::path& to) { imaging::write_volume(phantom.image, to); });
+    replace_when_written(labels, [&](const fs::path& to) { imaging::write_volume(phantom.labels, to); });
   } catch (const std::exception& e) {
     std::cerr << "error: " << e.what() << "\n";
     return kExitFailure;
@@ -90,7 +91,12 @@ int run_phantom(const PhantomOptions& o) {
   json.key("seconds").value(seconds);
   json.end_object();
   text << "\n";
-  std::ofstream(summary) << text.str();
+  try {
+    write_text_file(summary, text.str());
+  } catch (const std::exception& e) {
+    std::cerr << "error: " << e.what() << "\n";
+    return kExitFailure;
+  }
   if (o.json) {
     std::cout << text.str();
   } else {

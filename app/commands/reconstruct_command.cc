@@ -45,7 +45,7 @@ int run_reconstruct(const ReconstructOptions& o) {
   try {
     const std::filesystem::path out(o.out);
     if (out.has_parent_path()) std::filesystem::create_directories(out.parent_path());
-    imaging::write_volume(result.volume, out);
+    replace_when_written(out, [&](const std::filesystem::path& to) { imaging::write_volume(result.volume, to); });
   } catch (const std::exception& e) {
     std::cerr << "error: " << e.what() << "\n";
     return kExitFailure;

@@ -428,7 +428,12 @@ int run_replay(const ReplayOptions& o) {
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   std::ostringstream text;
   write_summary(text, o, scene, summary, patches, recording, session_seconds, seconds, comparison);
-  std::ofstream(out / "summary.json") << text.str();
+  try {
+    write_text_file(out / "summary.json", text.str());
+  } catch (const std::exception& e) {
+    std::cerr << "error: " << e.what() << "\n";
+    return kExitFailure;
+  }
   if (o.json) {
     std::cout << text.str();
   } else {

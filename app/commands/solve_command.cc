@@ -290,9 +290,7 @@ int run_solve(const SolveOptions& o) {
     if (!frames.empty()) {  // the time series of a dynamic case, or the one state
       write_pvd(pvd, frames);
     }
-    std::ofstream s(summary);
-    s << json.str();
-    if (!s) throw std::runtime_error("cannot write " + summary.string());
+    write_text_file(summary, json.str());
   } catch (const std::exception& e) {
     std::cerr << "error: " << e.what() << "\n";
     return kExitFailure;

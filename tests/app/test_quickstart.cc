@@ -52,11 +52,15 @@ TEST(Quickstart, MainJobRunsAndItsOutputsOpenInVtkReaders) {
     reader->Update();
     vtkUnstructuredGrid* grid = reader->GetOutput();
     ASSERT_GT(grid->GetNumberOfCells(), 1000) << d->GetAttribute("file");
-    if (cells >= 0) EXPECT_EQ(grid->GetNumberOfCells(), cells);
+    if (cells >= 0) {
+      EXPECT_EQ(grid->GetNumberOfCells(), cells);
+    }
     cells = grid->GetNumberOfCells();
     const double most = largest_point_vector(grid);
     ASSERT_GE(most, 0) << "no displacement field";
-    if (i == 0) EXPECT_EQ(most, 0) << "at rest";
+    if (i == 0) {
+      EXPECT_EQ(most, 0) << "at rest";
+    }
     largest = std::max(largest, most);
   }
   EXPECT_GT(largest, 0.004);  // the poke presses 8 mm

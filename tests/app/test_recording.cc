@@ -14,6 +14,7 @@
 #include <thread>
 #include <vector>
 
+#include "app/output_guard.h"
 #include "app/recording.h"
 
 namespace fetouch::app {
@@ -64,7 +65,9 @@ TEST(Recording, RoundTripKeepsEveryValue) {
       f.proportional_gain = 0.2, f.integral_gain = 1e-3 * j;
       writer.append(f);
     }
+    writer.commit();
   }
+  EXPECT_FALSE(fs::exists(partial_path(path)));  // renamed into place
   const Recording r = read_recording(path);
   EXPECT_EQ(r.header.program_version, "fetouch 0.test");
   EXPECT_EQ(r.header.scene_text, header().scene_text);
@@ -101,12 +104,12 @@ TEST(Recording, ReadableWhileWritten) {
   std::vector<DeviceSample> batch(300);
   for (long k = 0; k < 300; ++k) batch[k] = sample(0, k);
   writer.append(0, batch.data(), batch.size());
-  writer.flush();
-  EXPECT_EQ(read_recording(path).devices[0].samples.size(), 300u);
+  writer.flush();  // while it is written, the recording is the partial file
+  EXPECT_EQ(read_recording(partial_path(path)).devices[0].samples.size(), 300u);
   writer.append(0, batch.data(), batch.size());
   writer.flush();
-  EXPECT_EQ(read_recording(path).devices[0].samples.size(), 600u);
-  fs::remove(path);
+  EXPECT_EQ(read_recording(partial_path(path)).devices[0].samples.size(), 600u);
+  fs::remove(partial_path(path));
 }
 
 double now_s() {
@@ -137,7 +140,8 @@ TEST(Recording, SurvivesSigkillLosingAtMostOneSecond) {
   int status = 0;
   waitpid(child, &status, 0);
   ASSERT_TRUE(WIFSIGNALED(status));
-  const Recording r = read_recording(path);
+  EXPECT_FALSE(fs::exists(path));  // never completed: only the partial file
+  const Recording r = read_recording(partial_path(path));
   ASSERT_EQ(r.devices.size(), 2u);
   const auto& samples = r.devices[0].samples;
   ASSERT_GT(samples.size(), 100u);
@@ -147,7 +151,7 @@ TEST(Recording, SurvivesSigkillLosingAtMostOneSecond) {
   for (std::size_t i = 1; i < samples.size(); ++i) ASSERT_GE(samples[i].time_s, samples[i - 1].time_s) << i;
   // Rows kept are whole: the k-th row is the k-th sample written.
   for (std::size_t i = 0; i < samples.size(); i += 53) EXPECT_EQ(samples[i].position, sample(0, static_cast<long>(i)).position);
-  fs::remove(path);
+  fs::remove(partial_path(path));
 }
 
 TEST(Recording, NotARecordingIsAnError) {
@@ -173,6 +177,7 @@ TEST(Recording, DatasetsOfTheWrongShapeAreRefused) {
     FrameRecord f;
     f.stiffness_eigenvalues = {100, 200};
     writer.append(f);
+    writer.commit();
   }
   ASSERT_EQ(read_recording(good).devices.at(0).samples.size(), 10u);
   struct Case {

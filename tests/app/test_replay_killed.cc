@@ -1,5 +1,7 @@
 // A real `fetouch replay` session killed with SIGKILL mid-run (issue 6): its recording reopens, its
 // header is whole, and it holds every tick, in order, up to at most one second before the kill.
+// The session writes recording.partial.h5 and renames it to recording.h5 only when complete, so the
+// outputs of an earlier run in the folder are left as they were (issue 17).
 // The real-time clock ties the recording's time to the wall clock (tick k at k ms after the
 // session starts, which the command announces on stderr), so "one second before the kill" is a
 // tick number: the I/O thread flushes every half second.
@@ -11,6 +13,8 @@
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
+#include <fstream>
+#include <iterator>
 #include <string>
 #include <thread>
 
@@ -25,6 +29,9 @@ namespace fs = std::filesystem;
 TEST(ReplayKilled, RecordingHoldsEverySampleUpToASecondBeforeTheKill) {
   const fs::path dir = fs::temp_directory_path() / ("fetouch_killed_" + std::to_string(::getpid()));
   fs::remove_all(dir);
+  fs::create_directories(dir);
+  const std::string earlier = "the outputs of an earlier run";
+  for (const char* name : {"recording.h5", "summary.json"}) std::ofstream(dir / name) << earlier;
   const std::string scene = std::string(FETOUCH_SOURCE_DIR) + "/config/scenes/block_press.yaml";
   int err[2];
   ASSERT_EQ(pipe(err), 0);
@@ -57,7 +64,11 @@ TEST(ReplayKilled, RecordingHoldsEverySampleUpToASecondBeforeTheKill) {
   std::fclose(log);
   ASSERT_TRUE(WIFSIGNALED(status) && WTERMSIG(status) == SIGKILL) << "it finished before the kill";
 
-  const app::Recording r = app::read_recording(dir / "recording.h5");
+  for (const char* name : {"recording.h5", "summary.json"}) {
+    std::ifstream in(dir / name);
+    EXPECT_EQ(std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()), earlier) << name;
+  }
+  const app::Recording r = app::read_recording(dir / "recording.partial.h5");
   EXPECT_NE(r.header.scene_text.find("block_press"), std::string::npos);
   ASSERT_EQ(r.devices.size(), 1u);
   const auto& samples = r.devices[0].samples;
