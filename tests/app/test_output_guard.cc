@@ -53,6 +53,11 @@ TEST(OutputGuard, OutputsNeverReplaceInputs) {
   expect_refused("replay " + (source / "config/scenes/block_press.yaml").string() + " --trajectory " +
                      (dir / "recording.h5").string() + " --out " + dir.string(),
                  dir / "recording.h5");
+  // ... or over the partial file a replay writes until it completes.
+  write(dir / "recording.partial.h5", "a killed run's recording the user replays");
+  expect_refused("replay " + (source / "config/scenes/block_press.yaml").string() + " --trajectory " +
+                     (dir / "recording.partial.h5").string() + " --out " + dir.string(),
+                 dir / "recording.partial.h5");
   // reconstruct over its sweep (refused before the sweep is read).
   write(dir / "sweep.igs.mha", "a sweep");
   write(dir / "calibration.xml", "<PlusConfiguration/>");
