@@ -43,6 +43,7 @@ struct SceneReport {
   std::unique_ptr<config::Scene> scene;
   std::optional<meshes::MeshSummary> mesh_file;
   std::optional<fem::TissueMeshInfo> tissue;
+  fem::RegionMaterials regions;  // the scene's material of each of tissue's regions
   std::optional<imaging::VolumeInfo> volume;
 };
 
@@ -103,7 +104,8 @@ void check_referenced_data(SceneReport& report) {
     log::detail() << "building the mesh in deal.II";
     report.tissue = fem::inspect_tissue_mesh(spec);
     check_group_names(report, report.tissue->boundary_ids);
-    for (const config::Diagnostic& d : fem::assign_region_materials(scene, *report.tissue).problems)
+    report.regions = fem::assign_region_materials(scene, *report.tissue);
+    for (const config::Diagnostic& d : report.regions.problems)
       report.errors.push_back(diagnostic_at(report.file, {d.line, d.column}, d.key, d.message));
   };
   try {
@@ -257,9 +259,8 @@ void print_text(const SceneReport& r, std::ostream& out) {
   if ((r.tissue && r.tissue->regions.size() > 1) || !s.materials.empty()) {
     // Each region with its volume and the material it takes (known once the mesh was read).
     if (r.tissue) {
-      const fem::RegionMaterials assigned = fem::assign_region_materials(s, *r.tissue);
       for (const auto& region : r.tissue->regions) {
-        const int index = assigned.of_region.at(region.material_id);
+        const int index = r.regions.of_region.at(region.material_id);
         row("region", fem::describe_region(region) + ": " + std::to_string(region.cells) + " cells, " +
                           number(region.volume_m3 * 1e6) + " cm^3; " +
                           describe_material(index < 0 ? s.material : s.materials[std::size_t(index)].material));
@@ -366,7 +367,6 @@ void write_json(const std::vector<SceneReport>& reports, std::ostream& out) {
       }
       json.end_object();
       if (r.tissue) {
-        const fem::RegionMaterials assigned = fem::assign_region_materials(s, *r.tissue);
         json.key("regions").begin_array();
         for (const auto& region : r.tissue->regions) {
           json.begin_object();
@@ -374,7 +374,7 @@ void write_json(const std::vector<SceneReport>& reports, std::ostream& out) {
           json.key("name").value(region.name);
           json.key("cells").value(static_cast<long>(region.cells));
           json.key("volume_m3").value(region.volume_m3);
-          const int index = assigned.of_region.at(region.material_id);
+          const int index = r.regions.of_region.at(region.material_id);
           json.key("material").value(index < 0 ? std::string("material") : "materials." + s.materials[std::size_t(index)].region);
           json.end_object();
         }

@@ -6,9 +6,7 @@
 
 #include <chrono>
 #include <filesystem>
-#include <fstream>
 #include <iostream>
-#include <limits>
 #include <optional>
 #include <memory>
 #include <sstream>
@@ -395,7 +393,8 @@ int run_replay(const ReplayOptions& o) {
       inputs.emplace_back(probe.device.trajectory, "the trajectory of probe " + probe.name);
     // What a replay writes there (its meshes go to the mesh/ subfolder).
     const auto writes = [&scene](const std::string& file) {
-      return file == "recording.h5" || file == "recording.partial.h5" || file == "summary.json" || file == scene.name + ".pvd";
+      return file == "recording.h5" || file == partial_path("recording.h5") || file == "summary.json" ||
+             file == scene.name + ".pvd";
     };
     refuse_overwriting({fs::path(o.out)}, inputs, fs::path(o.out), writes);
   } catch (const std::invalid_argument& e) {
