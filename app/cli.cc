@@ -1,8 +1,12 @@
 #include "app/cli.h"
 
 #include <CLI/CLI.hpp>
+#include <vtkLogger.h>
 
 #include <algorithm>
+#include <cerrno>
+#include <cmath>
+#include <cstdlib>
 #include <exception>
 #include <iostream>
 #include <string>
@@ -20,6 +24,24 @@ namespace {
 std::string version_text() {
   return std::string("fetouch ") + kVersion + " (git " + kGitRevision + ", " + kBuildType +
          ", " + kCompiler + ", deal.II " + kDealIIVersion + ", VTK " + kVtkVersion + ")";
+}
+
+bool is_number(const char* text) {
+  char* end = nullptr;
+  std::strtod(text, &end);
+  return end != text && *end == '\0';
+}
+
+// The index of the first argument that is a number but not a finite one ("nan", "inf", "1e400"),
+// or 0: no value of any option may be one, and CLI11 would take it (a NaN passes every range check).
+int first_non_finite(int argc, char** argv) {
+  for (int i = 1; i < argc; ++i) {
+    char* end = nullptr;
+    errno = 0;
+    const double x = std::strtod(argv[i], &end);
+    if (end != argv[i] && *end == '\0' && (!std::isfinite(x) || (errno == ERANGE && std::abs(x) > 1))) return i;
+  }
+  return 0;
 }
 
 }  // namespace
@@ -56,6 +78,9 @@ int run_cli(int argc, char** argv) {
     if (quiet) log::set_level(log::Level::error);
     else if (verbosity >= 2) log::set_level(log::Level::debug);
     else if (verbosity == 1) log::set_level(log::Level::detail);
+    // VTK's own messages (a reader's complaint, an allocation that failed) are for debugging: the
+    // commands catch the errors and say what is wrong in one line (-vv shows VTK's text too).
+    if (verbosity < 2) vtkLogger::SetStderrVerbosity(vtkLogger::VERBOSITY_OFF);
   });
 
   // An unknown command: CLI11 would only say that a subcommand is required.
@@ -74,6 +99,16 @@ int run_cli(int argc, char** argv) {
       return kExitBadInput;
     }
   }
+  if (const int bad = first_non_finite(argc, argv)) {
+    std::string option = "argument " + std::to_string(bad);
+    for (int k = bad - 1; k >= 1; --k)
+      if (argv[k][0] == '-' && !is_number(argv[k])) {
+        option = argv[k];
+        break;
+      }
+    std::cerr << "error: " << option << ": " << argv[bad] << " is not a finite number\n";
+    return kExitBadInput;
+  }
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {
@@ -84,7 +119,9 @@ int run_cli(int argc, char** argv) {
     app.exit(e);
     return kExitOk;
   } catch (const CLI::ParseError& e) {
-    std::cerr << "error: " << e.what() << "\nRun `fetouch --help` (or `fetouch COMMAND --help`) "
+    std::string what = e.what();  // it quotes the argument: a megabyte of it is no message
+    if (what.size() > 300) what = what.substr(0, 297) + "...";
+    std::cerr << "error: " << what << "\nRun `fetouch --help` (or `fetouch COMMAND --help`) "
                                          "for usage.\n";
     return kExitBadInput;
   } catch (const std::exception& e) {

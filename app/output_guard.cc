@@ -21,6 +21,9 @@ bool same_file(const fs::path& a, const fs::path& b) {
 
 void refuse_overwriting(const std::vector<fs::path>& written, const std::vector<NamedInput>& inputs,
                         const fs::path& folder, const std::function<bool(const std::string&)>& written_in_folder) {
+  std::error_code error;
+  if (!folder.empty() && fs::exists(folder, error) && !fs::is_directory(folder, error))
+    throw std::invalid_argument("--out: " + folder.string() + " is a file, not a folder; name a folder for the outputs");
   for (const auto& [input, role] : inputs) {
     if (input.empty()) continue;
     for (const fs::path& output : written)

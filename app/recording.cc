@@ -274,6 +274,13 @@ std::vector<double> read_all(hid_t group, const std::string& name, hsize_t colum
                              (expected == 1 ? std::string("one value per row") : std::to_string(columns) + " per row") +
                              (dims[0] > kMaxRows ? " and at most 10^8 rows" : "") + " (docs/replay.md)");
   }
+  const hid_t stored = H5Dget_type(dataset);
+  const H5T_class_t kind = stored < 0 ? H5T_NO_CLASS : H5Tget_class(stored);
+  if (stored >= 0) H5Tclose(stored);
+  if (kind != H5T_FLOAT && kind != H5T_INTEGER) {
+    H5Dclose(dataset);
+    throw std::runtime_error(file + ": dataset " + name + " does not hold numbers; a recording's datasets are floating point or integer (docs/replay.md)");
+  }
   std::vector<double> values(static_cast<std::size_t>(dims[0] * columns));
   const herr_t status = values.empty() ? 0 : H5Dread(dataset, H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, values.data());
   H5Dclose(dataset);
@@ -310,7 +317,10 @@ double read_number(hid_t object, const std::string& name) {
 Recording read_recording(const std::filesystem::path& path) {
   quiet_hdf5();
   const std::string name = path.string();
-  if (!std::filesystem::is_regular_file(path)) throw std::runtime_error(name + ": no such file");
+  std::error_code error;
+  if (!std::filesystem::exists(path, error)) throw std::runtime_error(name + ": no such file");
+  if (!std::filesystem::is_regular_file(path, error))
+    throw std::runtime_error(name + ": not a regular file (a recording is an HDF5 file, not a folder, FIFO or device)");
   const hid_t access = latest_format();
   hid_t file = H5Fopen(name.c_str(), H5F_ACC_RDONLY | H5F_ACC_SWMR_READ, access);
   if (file < 0) file = H5Fopen(name.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
@@ -329,11 +339,20 @@ Recording read_recording(const std::filesystem::path& path) {
     if (devices < 0) throw std::runtime_error(name + ": no /devices group (not a Fetouch recording)");
     H5G_info_t info;
     H5Gget_info(devices, &info);
+    if (info.nlinks == 0) throw std::runtime_error(name + ": /devices holds no device (an empty recording)");
+    if (info.nlinks > 64) throw std::runtime_error(name + ": /devices holds " + std::to_string(info.nlinks) + " devices; a recording has at most 64");
     for (hsize_t i = 0; i < info.nlinks; ++i) {
-      char probe[256] = {0};
-      if (H5Lget_name_by_idx(devices, ".", H5_INDEX_CRT_ORDER, H5_ITER_INC, i, probe, sizeof probe, H5P_DEFAULT) < 0)
-        H5Lget_name_by_idx(devices, ".", H5_INDEX_NAME, H5_ITER_INC, i, probe, sizeof probe, H5P_DEFAULT);
-      const hid_t g = H5Gopen2(devices, probe, H5P_DEFAULT);
+      H5_index_t order = H5_INDEX_CRT_ORDER;
+      ssize_t length = H5Lget_name_by_idx(devices, ".", order, H5_ITER_INC, i, nullptr, 0, H5P_DEFAULT);
+      if (length < 0) order = H5_INDEX_NAME, length = H5Lget_name_by_idx(devices, ".", order, H5_ITER_INC, i, nullptr, 0, H5P_DEFAULT);
+      if (length <= 0 || length > 255)
+        throw std::runtime_error(name + ": device " + std::to_string(i) + " in /devices has a name of " + std::to_string(length) +
+                                 " characters; names have 1 to 255");
+      std::string probe(static_cast<std::size_t>(length) + 1, '\0');
+      H5Lget_name_by_idx(devices, ".", order, H5_ITER_INC, i, probe.data(), probe.size(), H5P_DEFAULT);
+      probe.resize(static_cast<std::size_t>(length));
+      const hid_t g = H5Gopen2(devices, probe.c_str(), H5P_DEFAULT);
+      if (g < 0) throw std::runtime_error(name + ": /devices/" + probe + " is not a group of datasets (docs/replay.md)");
       const auto time = read_all(g, "time_s", 1, name);
       const auto position = read_all(g, "position_m", 3, name);
       const auto velocity = read_all(g, "velocity_m_per_s", 3, name);
@@ -393,6 +412,21 @@ Recording read_recording(const std::filesystem::path& path) {
   }
   H5Fclose(file);
   return out;
+}
+
+haptics::Trajectory read_probe_trajectory(const std::filesystem::path& file, const std::string& probe_name, int index) {
+  if (file.extension() != ".h5") return haptics::read_trajectory_csv(file);
+  const Recording r = read_recording(file);
+  const RecordedDevice* d = nullptr;
+  for (const auto& device : r.devices)
+    if (device.name == probe_name) d = &device;
+  if (!d && index < static_cast<int>(r.devices.size())) d = &r.devices[static_cast<std::size_t>(index)];
+  if (!d || d->samples.size() < 2)
+    throw std::runtime_error(file.string() + ": no positions for probe " + probe_name + " (at least two samples)");
+  haptics::Trajectory t;
+  for (const auto& s : d->samples) t.times_s.push_back(s.time_s), t.positions_m.push_back(s.position);
+  t.check(file.string() + " (probe " + d->name + ")");
+  return t;
 }
 
 }  // namespace fetouch::app

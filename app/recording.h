@@ -25,6 +25,8 @@
 #include <string>
 #include <vector>
 
+#include "haptics/devices.h"
+
 namespace fetouch::app {
 
 struct RecordingHeader {
@@ -89,5 +91,10 @@ struct Recording {
 // Reads a recording back (also one still being written, or left by a killed session). Throws
 // std::runtime_error naming the file and what is missing.
 Recording read_recording(const std::filesystem::path& path);
+
+// A probe's path from `file`: a CSV of t, x, y, z, or a recording (.h5), where the probe is found
+// by `probe_name`, else the `index`-th device. Checked as Trajectory::check says; throws
+// std::runtime_error naming the file.
+haptics::Trajectory read_probe_trajectory(const std::filesystem::path& file, const std::string& probe_name, int index);
 
 }  // namespace fetouch::app

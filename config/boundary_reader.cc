@@ -6,6 +6,7 @@
 #include <set>
 #include <string>
 
+#include "config/plausible.h"
 #include "config/section_readers.h"
 
 namespace fetouch::config {
@@ -67,7 +68,7 @@ void read_selector(MapView& parent, Selector& out) {
       else
         for (double& c : out.plane_normal) c /= length;
     }
-    plane.number("tolerance_m", out.plane_tolerance_m, Range::positive());
+    plane.number("tolerance_m", out.plane_tolerance_m, plausible::plane_tolerance_m);
   }
 }
 

@@ -8,7 +8,8 @@ namespace fetouch::config {
 
 std::string Diagnostic::format() const {
   std::ostringstream out;
-  out << file;
+  // A path of hundreds of characters is shown by its two ends: the message stays one line.
+  out << (file.size() <= 200 ? file : file.substr(0, 80) + "..." + file.substr(file.size() - 80));
   if (line > 0) out << ':' << line << ':' << column;
   out << ": " << (severity == Severity::error ? "error" : "warning") << ": ";
   if (!key.empty()) out << key << ": ";

@@ -4,6 +4,7 @@
 #include <string>
 #include <vector>
 
+#include "config/plausible.h"
 #include "config/section_readers.h"
 #include "config/yaml_reader.h"
 
@@ -24,19 +25,19 @@ void read_material(Reader& reader, const Entry& e, Material& out) {
               {"model", "youngs_modulus_pa", "poisson_ratio", "c10_pa", "c01_pa", "bulk_modulus_pa",
                "density_kg_per_m3"});
   if (!map.valid()) return;
-  map.number("density_kg_per_m3", out.density_kg_per_m3, Range::positive());
+  map.number("density_kg_per_m3", out.density_kg_per_m3, plausible::density_kg_per_m3);
   if (!map.choice("model", out.model, kModels, Need::required)) return;
   if (out.model == MaterialModel::mooney_rivlin) {
     reject_keys(map, {"youngs_modulus_pa", "poisson_ratio"},
                 "by mooney_rivlin (it takes c10_pa, c01_pa and bulk_modulus_pa)");
-    map.number("c10_pa", out.c10_pa, Range::positive(), Need::required);
-    map.number("c01_pa", out.c01_pa, Range::non_negative(), Need::required);
-    map.number("bulk_modulus_pa", out.bulk_modulus_pa, Range::positive(), Need::required);
+    map.number("c10_pa", out.c10_pa, plausible::hyperelastic_constant_pa, Need::required);
+    map.number("c01_pa", out.c01_pa, {0, 1e9, false, false, "0 to 1 GPa"}, Need::required);
+    map.number("bulk_modulus_pa", out.bulk_modulus_pa, plausible::bulk_modulus_pa, Need::required);
   } else {
     reject_keys(map, {"c10_pa", "c01_pa", "bulk_modulus_pa"},
                 std::string("by ") + name_of(kModels, out.model) +
                     " (it takes youngs_modulus_pa and poisson_ratio)");
-    map.number("youngs_modulus_pa", out.youngs_modulus_pa, Range::positive(), Need::required);
+    map.number("youngs_modulus_pa", out.youngs_modulus_pa, plausible::modulus_pa, Need::required);
     // The bounds of an isotropic solid: K > 0 and mu > 0 with E > 0 give -1 < nu < 0.5.
     map.number("poisson_ratio", out.poisson_ratio, {-1, 0.5, true, true}, Need::required);
   }

@@ -5,11 +5,14 @@
 #include <algorithm>
 #include <cctype>
 #include <cmath>
+#include <cstdio>
 #include <fstream>
+#include <optional>
 #include <tuple>
 #include <set>
 #include <sstream>
 
+#include "config/plausible.h"
 #include "config/section_readers.h"
 #include "config/yaml_reader.h"
 
@@ -81,10 +84,11 @@ void read_generated(MapView& parent, GeneratedMesh& out) {
       reject_keys(map, {"radius_m", "inner_radius_m"}, "by shape box (it takes size_m)");
       if (map.vec3("size_m", out.size_m, Need::required)) {
         for (double s : out.size_m)
-          if (!(s > 0)) {
+          if (!plausible::tissue_length_m.contains(s)) {
             const Entry size = map.entry("size_m");
             map.reader().error(size.value_mark, size.path,
-                               "every edge length must be > 0, got " + format_number(s));
+                               "an edge of " + format_number(s) + " m; every edge length must be " +
+                                   plausible::tissue_length_m.describe());
             break;
           }
       }
@@ -92,12 +96,12 @@ void read_generated(MapView& parent, GeneratedMesh& out) {
     }
     case GeneratedShape::ball:
       reject_keys(map, {"size_m", "inner_radius_m"}, "by shape ball (it takes radius_m)");
-      map.number("radius_m", out.radius_m, Range::positive(), Need::required);
+      map.number("radius_m", out.radius_m, plausible::tissue_length_m, Need::required);
       break;
     case GeneratedShape::shell:
       reject_keys(map, {"size_m"}, "by shape shell (it takes radius_m and inner_radius_m)");
-      if (map.number("radius_m", out.radius_m, Range::positive(), Need::required) &&
-          map.number("inner_radius_m", out.inner_radius_m, Range::positive(), Need::required) &&
+      if (map.number("radius_m", out.radius_m, plausible::tissue_length_m, Need::required) &&
+          map.number("inner_radius_m", out.inner_radius_m, plausible::tissue_length_m, Need::required) &&
           out.inner_radius_m >= out.radius_m) {
         const Entry inner = map.entry("inner_radius_m");
         map.reader().error(inner.value_mark, inner.path,
@@ -114,7 +118,7 @@ void read_meshing(MapView& parent, MeshingOptions& out) {
               {"target_size_m", "labels", "regions", "fetus", "threshold", "smoothing", "smoothing_sigma_m",
                "closing_voxels", "refine"});
   if (!map.valid()) return;
-  map.number("target_size_m", out.target_size_m, Range::positive());
+  map.number("target_size_m", out.target_size_m, plausible::element_size_m);
   if (map.has("threshold")) {
     double threshold = 0;
     if (map.number("threshold", threshold, Range::any())) out.threshold = threshold;
@@ -170,15 +174,15 @@ void read_meshing(MapView& parent, MeshingOptions& out) {
     map.reader().error(e.key_mark, e.path,
                        "give one of labels (a label map), fetus (a fetal volume) or threshold (an intensity volume)");
   map.choice("smoothing", out.smoothing, kFilters);
-  map.number("smoothing_sigma_m", out.smoothing_sigma_m, Range::positive());
+  map.number("smoothing_sigma_m", out.smoothing_sigma_m, plausible::smoothing_sigma_m);
   map.integer("closing_voxels", out.closing_voxels, {0, 10});
   if (map.has("refine")) {
     const Entry r = map.entry("refine");
     MapView refine(map.reader(), r.value, r.path, r.key_mark, {"center_m", "radius_m", "size_m"});
     Vec3 center{};
     if (refine.valid() && refine.vec3("center_m", center, Need::required) &&
-        refine.number("radius_m", out.refine_radius_m, Range::positive(), Need::required) &&
-        refine.number("size_m", out.refine_size_m, Range::positive(), Need::required))
+        refine.number("radius_m", out.refine_radius_m, plausible::tissue_length_m, Need::required) &&
+        refine.number("size_m", out.refine_size_m, plausible::element_size_m, Need::required))
       out.refine_center_m = center;
   }
 }
@@ -253,8 +257,8 @@ void read_effect_parameters(Reader& reader, Effect effect, const Entry& e, Effec
       MapView map(reader, e.value, e.path, e.key_mark,
                   {"mass_coefficient_per_s", "stiffness_coefficient_s"});
       if (!map.valid()) break;
-      map.number("mass_coefficient_per_s", out.rayleigh_mass_per_s, Range::non_negative());
-      map.number("stiffness_coefficient_s", out.rayleigh_stiffness_s, Range::non_negative());
+      map.number("mass_coefficient_per_s", out.rayleigh_mass_per_s, {0, 1e4, false, false, "up to 10^4 per second"});
+      map.number("stiffness_coefficient_s", out.rayleigh_stiffness_s, {0, 1, false, false, "up to 1 s"});
       break;
     }
     case Effect::cavity: {
@@ -265,8 +269,8 @@ void read_effect_parameters(Reader& reader, Effect effect, const Entry& e, Effec
         reader.error(map.entry("surface").value_mark, map.child_path("surface"),
                      "expected the name of the mesh's physical group that bounds the cavity");
       map.choice("law", out.cavity_law, kLaws);
-      map.number("initial_pressure_pa", out.cavity_initial_pressure_pa, Range::non_negative());
-      map.number("bulk_modulus_pa", out.cavity_bulk_modulus_pa, Range::positive());
+      map.number("initial_pressure_pa", out.cavity_initial_pressure_pa, plausible::pressure_pa);
+      map.number("bulk_modulus_pa", out.cavity_bulk_modulus_pa, plausible::bulk_modulus_pa);
       break;
     }
     default:
@@ -350,12 +354,32 @@ int Haptics::ratio(const Solver& solver) const {
   return static_cast<int>(std::lround(rate_hz / solver.rate_hz));
 }
 
+namespace {
+
+constexpr std::uintmax_t kMaxSceneBytes = 1u << 20;
+
+}  // namespace
+
 LoadedScene parse_scene(const std::string& text, const std::string& label,
                         const std::filesystem::path& base_dir) {
   Reader reader(label, base_dir);
+  // YAML is UTF-8 text: a NUL byte or a byte that is not UTF-8 means a binary or damaged file.
+  if (const auto bad = first_non_text_byte(text)) {
+    const YAML::Mark mark = mark_at(text, *bad);
+    char byte[8];
+    std::snprintf(byte, sizeof byte, "0x%02X", static_cast<unsigned char>(text[*bad]));
+    reader.error(mark, "", std::string(text[*bad] == '\0' ? "a NUL byte" : "byte " + std::string(byte) + ", not UTF-8") +
+                               "; a scene is UTF-8 YAML text");
+    throw SceneError(reader.diagnostics());
+  }
   YAML::Node root;
   try {
-    root = YAML::Load(text);
+    const std::vector<YAML::Node> documents = YAML::LoadAll(text);
+    if (documents.size() > 1) {
+      reader.error(documents[1].Mark(), "", "a second YAML document (after '---'); a scene file holds one");
+      throw SceneError(reader.diagnostics());
+    }
+    if (!documents.empty()) root.reset(documents[0]);
   } catch (const YAML::ParserException& error) {
     reader.error(error.mark, "", "YAML syntax: " + error.msg);
     throw SceneError(reader.diagnostics());
@@ -408,15 +432,22 @@ LoadedScene parse_scene(const std::string& text, const std::string& label,
 
 LoadedScene load_scene(const std::filesystem::path& file) {
   const std::string label = file.string();
-  std::ifstream in(file, std::ios::binary);
-  std::error_code ec;
-  if (!in || std::filesystem::is_directory(file, ec)) {
+  const auto refuse = [&](const std::string& message) {
     Diagnostic d;
     d.file = label;
-    d.message = std::filesystem::exists(file, ec) ? "cannot read the scene file"
-                                                  : "no such scene file";
+    d.message = message;
     throw SceneError({d});
-  }
+  };
+  std::error_code ec;
+  // Only a regular file of plausible size is read: a FIFO or a device would block or never end.
+  if (!std::filesystem::exists(file, ec)) refuse(ec ? "cannot be reached: " + ec.message() : "no such scene file");
+  if (!std::filesystem::is_regular_file(file, ec))
+    refuse("not a regular file; a scene is a YAML text file, not a folder, FIFO or device");
+  if (std::filesystem::file_size(file, ec) > kMaxSceneBytes)
+    refuse(std::to_string(std::filesystem::file_size(file, ec) >> 10) +
+           " KB; a scene is a few kilobytes of YAML, at most 1 MB (meshes and trajectories go in their own files)");
+  std::ifstream in(file, std::ios::binary);
+  if (!in) refuse("cannot read the scene file");
   std::ostringstream text;
   text << in.rdbuf();
   const auto absolute = std::filesystem::absolute(file).lexically_normal();

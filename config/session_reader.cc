@@ -7,6 +7,7 @@
 #include <set>
 #include <string>
 
+#include "config/plausible.h"
 #include "config/section_readers.h"
 
 namespace fetouch::config {
@@ -35,7 +36,7 @@ void read_solver(MapView& scene, Solver& out) {
   MapView map(reader, e.value, e.path, e.key_mark,
               {"rate_hz", "newton", "linear_solver", "direct_max_dofs", "accuracy", "frame_newton_iterations"});
   if (!map.valid()) return;
-  map.number("rate_hz", out.rate_hz, Range::positive());
+  map.number("rate_hz", out.rate_hz, plausible::solver_rate_hz);
   map.choice("linear_solver", out.linear_solver, kLinearSolvers);
   map.integer("direct_max_dofs", out.direct_max_dofs, {1, 1e9});
   map.integer("frame_newton_iterations", out.frame_newton_iterations, {0, 1000});
@@ -47,8 +48,8 @@ void read_solver(MapView& scene, Solver& out) {
     } else {
       MapView accuracy(reader, a.value, a.path, a.key_mark, {"position_m", "force_n", "compliance"});
       if (accuracy.valid()) {
-        accuracy.number("position_m", out.accuracy_position_m, Range::positive());
-        accuracy.number("force_n", out.accuracy_force_n, Range::positive());
+        accuracy.number("position_m", out.accuracy_position_m, plausible::accuracy_position_m);
+        accuracy.number("force_n", out.accuracy_force_n, plausible::accuracy_force_n);
         accuracy.number("compliance", out.accuracy_compliance, {1e-12, 0.1});
       }
     }
@@ -60,7 +61,7 @@ void read_solver(MapView& scene, Solver& out) {
                     "max_load_step_cuts"});
     if (!newton.valid()) return;
     newton.number("relative_tolerance", out.newton_relative_tolerance, {0, 1, true, true});
-    newton.number("absolute_tolerance", out.newton_absolute_tolerance, Range::positive());
+    newton.number("absolute_tolerance", out.newton_absolute_tolerance, plausible::newton_absolute_tolerance);
     newton.integer("max_iterations", out.newton_max_iterations, {1, 1000});
     newton.boolean("line_search", out.line_search);
     newton.integer("max_load_step_cuts", out.max_load_step_cuts, {0, 30});
@@ -75,13 +76,13 @@ void read_haptics(MapView& scene, Haptics& out) {
                "max_force_rate_n_per_s", "watchdog_timeout_s", "coupling"});
   if (!map.valid()) return;
   map.boolean("coupling", out.coupling);
-  map.number("rate_hz", out.rate_hz, Range::positive());
+  map.number("rate_hz", out.rate_hz, plausible::haptic_rate_hz);
   map.choice("local_model", out.local_model, kLocalModels);
   map.choice("hold", out.hold, kHolds);
   map.number("robustness_margin", out.robustness_margin, {0, 1, false, true});
-  map.number("max_force_n", out.max_force_n, Range::positive());
-  map.number("max_force_rate_n_per_s", out.max_force_rate_n_per_s, Range::positive());
-  map.number("watchdog_timeout_s", out.watchdog_timeout_s, Range::positive());
+  map.number("max_force_n", out.max_force_n, plausible::max_force_n);
+  map.number("max_force_rate_n_per_s", out.max_force_rate_n_per_s, plausible::max_force_rate_n_per_s);
+  map.number("watchdog_timeout_s", out.watchdog_timeout_s, plausible::watchdog_timeout_s);
   if (!map.has("gains")) return;
   const Entry g = map.entry("gains");
   if (g.value.IsScalar()) {
@@ -94,11 +95,11 @@ void read_haptics(MapView& scene, Haptics& out) {
   MapView gains(reader, g.value, g.path, g.key_mark, {"proportional_n_per_m", "integral_n_per_m"});
   if (!gains.valid()) return;
   out.automatic_gains = false;
-  gains.number("proportional_n_per_m", out.proportional_n_per_m, Range::positive(), Need::required);
+  gains.number("proportional_n_per_m", out.proportional_n_per_m, plausible::gain_n_per_m, Need::required);
   const bool integral = out.local_model == LocalModelType::pi ||
                         out.local_model == LocalModelType::pi_smith;
   if (integral)
-    gains.number("integral_n_per_m", out.integral_n_per_m, Range::positive(), Need::required);
+    gains.number("integral_n_per_m", out.integral_n_per_m, plausible::gain_n_per_m, Need::required);
   else
     reject_keys(gains, {"integral_n_per_m"},
                 std::string("by local model ") + name_of(kLocalModels, out.local_model) +
@@ -140,9 +141,9 @@ void read_device(MapView& probe, Device& out) {
       MapView hand(reader, h.value, h.path, h.key_mark,
                    {"mass_kg", "stiffness_n_per_m", "damping_n_s_per_m"});
       if (!hand.valid()) break;
-      hand.number("mass_kg", out.hand.mass_kg, Range::positive());
-      hand.number("stiffness_n_per_m", out.hand.stiffness_n_per_m, Range::positive());
-      hand.number("damping_n_s_per_m", out.hand.damping_n_s_per_m, Range::non_negative());
+      hand.number("mass_kg", out.hand.mass_kg, plausible::hand_mass_kg);
+      hand.number("stiffness_n_per_m", out.hand.stiffness_n_per_m, plausible::hand_stiffness_n_per_m);
+      hand.number("damping_n_s_per_m", out.hand.damping_n_s_per_m, plausible::hand_damping_n_s_per_m);
       break;
     }
     case DeviceType::phantom:
@@ -167,6 +168,12 @@ void read_probes(MapView& scene, std::vector<Probe>& out) {
                      detail::describe_node(e.value));
     return;
   }
+  if (e.value.size() > static_cast<size_t>(plausible::kMaxProbes)) {
+    reader.error(e.value_mark, e.path,
+                 std::to_string(e.value.size()) + " probes; a scene has at most " +
+                     std::to_string(plausible::kMaxProbes) + " (one per hand at a trainer)");
+    return;
+  }
   std::set<std::string> names;
   for (size_t i = 0; i < e.value.size(); ++i) {
     const YAML::Node item = e.value[i];
@@ -184,7 +191,7 @@ void read_probes(MapView& scene, std::vector<Probe>& out) {
         reader.error(name.value_mark, name.path,
                      "probe name '" + probe.name + "' is used twice; probe names must be unique");
     }
-    map.number("radius_m", probe.radius_m, Range::positive());
+    map.number("radius_m", probe.radius_m, plausible::probe_radius_m);
     map.require("device", "where the probe's positions come from");
     if (map.has("device")) read_device(map, probe.device);
     out.push_back(probe);

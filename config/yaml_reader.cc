@@ -1,6 +1,8 @@
 #include "config/yaml_reader.h"
 
+#include <algorithm>
 #include <cmath>
+#include <optional>
 #include <limits>
 #include <sstream>
 #include <system_error>
@@ -55,7 +57,38 @@ bool Reader::has_errors() const {
   return false;
 }
 
+// The offset of the first NUL byte or malformed UTF-8 sequence, if any.
+std::optional<std::size_t> first_non_text_byte(const std::string& text) {
+  const auto* b = reinterpret_cast<const unsigned char*>(text.data());
+  const std::size_t n = text.size();
+  for (std::size_t i = 0; i < n;) {
+    const unsigned char c = b[i];
+    if (c == 0) return i;
+    const int extra = c < 0x80 ? 0 : (c >> 5) == 0x6 ? 1 : (c >> 4) == 0xe ? 2 : (c >> 3) == 0x1e ? 3 : -1;
+    if (extra < 0 || (extra == 1 && c < 0xc2) || i + static_cast<std::size_t>(extra) >= n + (extra == 0)) return i;
+    for (int k = 1; k <= extra; ++k)
+      if ((b[i + k] >> 6) != 0x2) return i;
+    i += static_cast<std::size_t>(extra) + 1;
+  }
+  return std::nullopt;
+}
+
+// A YAML mark (0-based line and column) for a byte offset.
+YAML::Mark mark_at(const std::string& text, std::size_t offset) {
+  YAML::Mark mark;
+  mark.pos = static_cast<int>(offset);
+  mark.line = static_cast<int>(std::count(text.begin(), text.begin() + static_cast<long>(offset), '\n'));
+  const std::size_t line_start = text.rfind('\n', offset == 0 ? 0 : offset - 1);
+  mark.column = static_cast<int>(line_start == std::string::npos || offset == 0 ? offset : offset - line_start - 1);
+  return mark;
+}
+
 std::string Range::describe() const {
+  const std::string bounds = describe_bounds();
+  return why ? bounds + " (" + why + ")" : bounds;
+}
+
+std::string Range::describe_bounds() const {
   const bool has_low = low > -1e307, has_high = high < 1e307;
   if (has_low && !has_high) return std::string(low_open ? "> " : ">= ") + format_number(low);
   if (!has_low && has_high) return std::string(high_open ? "< " : "<= ") + format_number(high);
@@ -86,6 +119,12 @@ std::optional<double> read_number(Reader& reader, const Entry& entry) {
   const YAML::Node& node = entry.value;
   if (!node.IsScalar() || is_quoted(node)) {
     reader.error(entry.value_mark, entry.path, "expected a number, got " + describe_node(node));
+    return std::nullopt;
+  }
+  // An explicit tag other than a number's (`!!str 5000`, `!pascal 5000`) says it is not a number.
+  const std::string& tag = node.Tag();
+  if (tag != "?" && tag != "" && tag != "tag:yaml.org,2002:float" && tag != "tag:yaml.org,2002:int") {
+    reader.error(entry.value_mark, entry.path, "expected a number, got a value tagged " + tag + "; write the number without a tag");
     return std::nullopt;
   }
   const std::string& text = node.Scalar();

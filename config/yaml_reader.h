@@ -42,7 +42,9 @@ struct Range {
   double high = 1e308;
   bool low_open = false;
   bool high_open = false;
+  const char* why = nullptr;  // what the range means, with units ("0.1 mm to 2 m: ...")
   std::string describe() const;
+  std::string describe_bounds() const;
   bool contains(double value) const;
 
   static Range positive() { return {0, 1e308, true, false}; }
@@ -120,6 +122,11 @@ class MapView {
   bool valid_ = false;
   std::map<std::string, Entry> entries_;
 };
+
+// The offset of the first NUL byte or malformed UTF-8 sequence in `text`, if any.
+std::optional<std::size_t> first_non_text_byte(const std::string& text);
+// A YAML mark (0-based line and column) for a byte offset of `text`.
+YAML::Mark mark_at(const std::string& text, std::size_t offset);
 
 // The value of an entry read as a scalar of the given kind, with its own diagnostics.
 std::optional<double> read_number(Reader& reader, const Entry& entry);

@@ -1,6 +1,7 @@
 #include "fem/tissue_mesh_builder.h"
 
 #include "fem/vtu_mesh.h"
+#include "meshes/mesh_file_checks.h"
 
 #include <deal.II/grid/grid_generator.h>
 #include <deal.II/grid/grid_in.h>
@@ -154,22 +155,14 @@ TissueMeshInfo build_tissue_mesh(const config::MeshSpec& spec, Triangulation<3>&
       break;
     case config::MeshSource::file: {
       const std::string file = spec.path.string();
+      meshes::check_mesh_file(spec.path);
       if (spec.path.extension() == ".vtu") {
         info.boundary_ids = read_vtu_mesh(file, tria, &volume_names);
         break;
       }
       if (spec.path.extension() != ".msh")
         throw std::runtime_error(file + ": the solver reads Gmsh .msh and VTK .vtu meshes");
-      {
-        // Gmsh opens whatever it is given by its content: a file that is not a mesh would be run
-        // as a .geo script (which can call the shell). Only a mesh goes to Gmsh.
-        std::ifstream head(file);
-        std::string first;
-        std::getline(head, first);
-        if (first.rfind("$MeshFormat", 0) != 0)
-          throw std::runtime_error(file + ":1: not a Gmsh mesh (expected $MeshFormat on the first line)");
-      }
-      dealii::GridIn<3> in;
+      dealii::GridIn<3> in;  // check_mesh_file made sure it is a mesh, not a .geo script
       in.attach_triangulation(tria);
       const auto unreadable = [&file](const std::string& why) {
         try {
@@ -199,6 +192,15 @@ TissueMeshInfo build_tissue_mesh(const config::MeshSpec& spec, Triangulation<3>&
       throw std::runtime_error("the synthetic phantom must be meshed first (the app does: app/scene_mesh.h)");
   }
 
+  if (spec.source == config::MeshSource::file) {
+    double low[3] = {1e300, 1e300, 1e300}, high[3] = {-1e300, -1e300, -1e300};
+    for (const auto& v : tria.get_vertices())
+      for (int d = 0; d < 3; ++d) low[d] = std::min(low[d], v[d]), high[d] = std::max(high[d], v[d]);
+    if (tria.n_vertices() == 0 || std::any_of(tria.get_vertices().begin(), tria.get_vertices().end(),
+                                              [](const Point<3>& v) { return !std::isfinite(v.norm_square()); }))
+      throw std::runtime_error(spec.path.string() + ": a vertex has a coordinate that is not a finite number");
+    meshes::check_mesh_extent(spec.path.string(), low, high);
+  }
   info.simplex = tria.all_reference_cells_are_simplex();
   if (simplex != info.simplex)
     throw std::runtime_error(std::string("element ") + config::to_string(spec.element) + " needs " +

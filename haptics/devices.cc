@@ -13,6 +13,25 @@
 
 namespace fetouch::haptics {
 
+namespace {
+
+// A number in a message, as short as it reads exactly enough ("0.001", "1e+05").
+std::string number(double x) {
+  std::ostringstream out;
+  out << std::setprecision(6) << x;
+  return out.str();
+}
+
+// A line of a file as quoted in a message: at most 60 characters, control and non-ASCII bytes as '?'.
+std::string excerpt(const std::string& line) {
+  std::string out = line.size() <= 60 ? line : line.substr(0, 57) + "...";
+  for (char& c : out)
+    if (static_cast<unsigned char>(c) < 0x20 || static_cast<unsigned char>(c) >= 0x7f) c = '?';
+  return out;
+}
+
+}  // namespace
+
 Eigen::Vector3d Trajectory::at(double t) const {
   if (times_s.empty()) return Eigen::Vector3d::Zero();
   if (t <= times_s.front()) return positions_m.front();
@@ -48,16 +67,27 @@ void Trajectory::check(const std::string& source) const {
   for (std::size_t i = 0; i < times_s.size(); ++i) {
     const std::string row = source + ": sample " + std::to_string(i);
     if (!std::isfinite(times_s[i]) || !positions_m[i].allFinite()) throw std::runtime_error(row + " is not finite");
+    if (i == 0 && times_s[i] < 0)
+      throw std::runtime_error(row + ": time " + number(times_s[i]) + " s; times are seconds since the start, >= 0");
     if (i > 0 && !(times_s[i] > times_s[i - 1]))
-      throw std::runtime_error(row + ": time " + std::to_string(times_s[i]) + " s is not after the previous " +
-                               std::to_string(times_s[i - 1]) + " s (times must strictly increase)");
+      throw std::runtime_error(row + ": time " + number(times_s[i]) + " s is not after the previous " +
+                               number(times_s[i - 1]) + " s (times must strictly increase)");
+    if (i > 0 && times_s[i] - times_s[i - 1] < kMinStepS)
+      throw std::runtime_error(row + ": " + number(times_s[i] - times_s[i - 1]) +
+                               " s after the previous sample; samples are at least 1 us apart");
     if (positions_m[i].norm() > kMaxReachM)
-      throw std::runtime_error(row + ": a point " + std::to_string(positions_m[i].norm()) +
+      throw std::runtime_error(row + ": a point " + number(positions_m[i].norm()) +
                                " m from the origin (at most 10 m; positions are in metres)");
+    if (i > 0) {
+      const double speed = (positions_m[i] - positions_m[i - 1]).norm() / (times_s[i] - times_s[i - 1]);
+      if (speed > kMaxSpeedMPerS)
+        throw std::runtime_error(row + ": the probe moves at " + number(speed) +
+                                 " m/s from the previous sample; a hand moves it at most 10 m/s (positions in metres, times in seconds)");
+    }
   }
   if (duration_s() > kMaxDurationS)
-    throw std::runtime_error(source + ": lasts " + std::to_string(duration_s()) + " s; a replay lasts at most " +
-                             std::to_string(kMaxDurationS) + " s");
+    throw std::runtime_error(source + ": lasts " + number(duration_s()) + " s; a replay lasts at most " +
+                             number(kMaxDurationS) + " s");
 }
 
 Trajectory read_trajectory_csv(const std::filesystem::path& path) {
@@ -83,13 +113,13 @@ Trajectory read_trajectory_csv(const std::filesystem::path& path) {
     std::istringstream cells(line);
     double v[4];
     int n = 0;
-    const std::string not_four = "expected four numbers t, x, y, z, found '" + line + "'";
+    const std::string not_four = "expected four numbers t, x, y, z, found '" + excerpt(line) + "'";
     while (std::getline(cells, cell, ',')) {
       std::istringstream number_in(cell);
       double x;
       std::string rest;
       if (n >= 4 || !(number_in >> x) || (number_in >> rest)) fail(not_four);
-      if (!std::isfinite(x)) fail("a value is not finite: '" + cell + "'");
+      if (!std::isfinite(x)) fail("a value is not finite: '" + excerpt(cell) + "'");
       v[n++] = x;
     }
     if (n != 4) fail(not_four);
@@ -119,10 +149,10 @@ void write_trajectory_csv(const Trajectory& trajectory, const std::filesystem::p
 }
 
 Trajectory scripted_path(PathShape shape, const PathSettings& s) {
-  if (!(s.normal.norm() > 0)) throw std::invalid_argument("path: the normal must not be zero");
+  if (!(s.normal.norm() > 0)) throw std::invalid_argument("--normal: the normal must not be zero");
   if (!(s.approach_m >= 0) || !(s.depth_m >= 0)) throw std::invalid_argument("path: lengths must not be negative");
   for (double d : {s.approach_s, s.press_s, s.hold_s, s.release_s, s.retreat_s})
-    if (!(d > 0)) throw std::invalid_argument("path: every duration must be positive");
+    if (!(d > 0)) throw std::invalid_argument("--times: every duration must be positive");
   const Eigen::Vector3d n = s.normal.normalized();
   const Eigen::Vector3d moved = shape == PathShape::slide ? s.slide_m : Eigen::Vector3d::Zero();
   Trajectory t;

@@ -31,12 +31,15 @@ struct Trajectory {
   std::vector<Eigen::Vector3d> resampled(double period_s) const;
   // The longest stretch [from, to] over which the path stays put (0, 0 if it never does).
   std::pair<double, double> longest_hold() const;
-  // Throws std::runtime_error starting with `source` unless every value is finite, the times
-  // strictly increase, the trajectory lasts at most kMaxDurationS and no point is farther than
-  // kMaxReachM from the origin.
+  // Throws std::runtime_error starting with `source` unless every value is finite, the times start
+  // at 0 or later and increase by at least kMinStepS, the trajectory lasts at most kMaxDurationS,
+  // no point is farther than kMaxReachM from the origin and the probe never moves faster than
+  // kMaxSpeedMPerS.
   void check(const std::string& source) const;
   static constexpr double kMaxDurationS = 3600;  // an hour: 3.6 million ticks at 1 kHz
   static constexpr double kMaxReachM = 10;       // a probe 10 m from the scene's origin is a unit error
+  static constexpr double kMinStepS = 1e-6;      // samples closer than 1 us: no tracker or device gives them
+  static constexpr double kMaxSpeedMPerS = 10;   // a hand moves a probe at under 5 m/s
 };
 
 // Reads `t, x, y, z` rows (s, m); a header line of names and lines starting with '#' are skipped.

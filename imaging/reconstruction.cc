@@ -7,9 +7,11 @@
 #include <fstream>
 #include <limits>
 #include <map>
+#include <optional>
 #include <sstream>
 #include <stdexcept>
 
+#include "imaging/volume_header.h"
 #include "imaging/volume_io.h"
 
 namespace fetouch::imaging {
@@ -74,24 +76,48 @@ bool tag_attributes(const std::string& tag, std::map<std::string, std::string>& 
   }
 }
 
+// A value as quoted in a message: at most 80 characters, control and non-ASCII bytes as '?'.
+std::string shown(const std::string& text) {
+  std::string out = text.size() <= 80 ? text : text.substr(0, 77) + "...";
+  for (char& c : out)
+    if (static_cast<unsigned char>(c) < 0x20 || static_cast<unsigned char>(c) >= 0x7f) c = '?';
+  return out;
+}
+
+// Why a 4 x 4 matrix is not a plausible transform, or "" when it is: an affine last row, a
+// translation within `max_shift_mm`, and a linear part whose columns have lengths in [min_scale,
+// max_scale] (1 for a rigid pose; mm per pixel for a calibration) and are orthogonal: the cosine
+// of the angle between two at most `max_cosine` (a calibration fit leaves a few per cent).
+std::string implausible_transform(const Matrix4& m, double min_scale, double max_scale, double max_shift_mm,
+                                  double max_cosine) {
+  if (m[12] != 0 || m[13] != 0 || m[14] != 0 || m[15] != 1) return "its last row is not 0 0 0 1 (not an affine transform)";
+  for (int r = 0; r < 3; ++r)
+    if (!(std::abs(m[4 * r + 3]) <= max_shift_mm)) return "a translation beyond " + std::to_string(int(max_shift_mm / 1000)) + " m";
+  double length[3];
+  for (int c = 0; c < 3; ++c) {
+    length[c] = std::sqrt(m[c] * m[c] + m[4 + c] * m[4 + c] + m[8 + c] * m[8 + c]);
+    if (!(length[c] >= min_scale && length[c] <= max_scale)) {
+      std::ostringstream why;
+      why << "column " << c + 1 << " has length " << length[c] << "; expected " << min_scale << " to " << max_scale;
+      return why.str();
+    }
+  }
+  for (int a = 0; a < 3; ++a)
+    for (int b = a + 1; b < 3; ++b) {
+      const double dot = m[a] * m[b] + m[4 + a] * m[4 + b] + m[8 + a] * m[8 + b];
+      if (std::abs(dot) > max_cosine * length[a] * length[b]) return "its axes are not orthogonal (sheared)";
+    }
+  return "";
+}
+
 }  // namespace
 
 TrackedSweep read_tracked_sweep(const std::filesystem::path& path) {
   const std::string name = path.string();
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw std::runtime_error(name + ": cannot open the sweep");
-  std::map<std::string, std::string> fields;
-  std::string line;
-  while (std::getline(in, line)) {
-    const auto eq = line.find('=');
-    if (eq == std::string::npos) continue;
-    std::string key = line.substr(0, eq), value = line.substr(eq + 1);
-    key.erase(key.find_last_not_of(" \t\r") + 1);
-    value.erase(0, value.find_first_not_of(" \t"));
-    value.erase(value.find_last_not_of(" \t\r") + 1);
-    fields[key] = value;
-    if (key == "ElementDataFile") break;
-  }
+  std::error_code error;
+  if (!std::filesystem::is_regular_file(path, error))
+    throw std::runtime_error(name + ": not a regular file (a sweep is a .igs.mha file, not a folder, FIFO or device)");
+  std::map<std::string, std::string> fields = text_header(path, '=');
   TrackedSweep sweep;
   const Volume<float> pixels = read_volume(path);
   sweep.frames.dimensions = pixels.dimensions;
@@ -112,9 +138,15 @@ TrackedSweep read_tracked_sweep(const std::filesystem::path& path) {
       const auto found = fields.find(key);
       if (found == fields.end()) throw std::runtime_error(name + ": frame " + std::to_string(f) + " has no " + key);
       if (!parse_matrix(found->second, *matrix))
-        throw std::runtime_error(name + ": " + key + " is not 16 numbers: '" + found->second + "'");
+        throw std::runtime_error(name + ": " + key + " is not 16 finite numbers: '" + shown(found->second) + "'");
       const auto status = fields.find(key + "Status");
-      if (status != fields.end() && status->second != "OK") pose.valid = false;
+      if (status != fields.end() && status->second != "OK") {
+        pose.valid = false;  // an untracked frame's matrix means nothing
+        continue;
+      }
+      // A tracked pose is rigid: a rotation (columns of length 1, within 2 %) and a shift within 100 m.
+      const std::string why = implausible_transform(*matrix, 0.98, 1.02, 1e5, 0.02);
+      if (!why.empty()) throw std::runtime_error(name + ": " + key + " is not a rigid pose: " + why);
     }
   }
   return sweep;
@@ -130,6 +162,20 @@ Matrix4 read_image_to_probe(const std::filesystem::path& path) {
   std::ifstream in(path);
   if (!in) throw std::runtime_error(name + ": cannot open the calibration");
   const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  // The root element (after the XML declaration, comments and a byte-order mark) is PlusConfiguration.
+  std::size_t root = text.compare(0, 3, "\xEF\xBB\xBF") == 0 ? 3 : 0;
+  for (;;) {
+    root = text.find_first_not_of(" \t\r\n", root);
+    if (root != std::string::npos && text.compare(root, 4, "<!--") == 0) root = text.find("-->", root);
+    else if (root != std::string::npos && text.compare(root, 2, "<?") == 0) root = text.find("?>", root);
+    else break;
+    if (root != std::string::npos) root += 2;
+  }
+  if (root == std::string::npos || text.compare(root, 18, "<PlusConfiguration") != 0)
+    throw std::runtime_error(name + ": not a PLUS configuration file (expected the root element <PlusConfiguration>, found '" +
+                             shown(root == std::string::npos ? std::string() : text.substr(root, 24)) + "')");
+  std::optional<Matrix4> found;
+  std::size_t found_line = 0;
   for (std::size_t at = text.find("<Transform"); at != std::string::npos; at = text.find("<Transform", at + 1)) {
     const std::size_t begin = at + std::string("<Transform").size();
     if (begin < text.size() && !std::isspace(static_cast<unsigned char>(text[begin])) && text[begin] != '>' &&
@@ -145,14 +191,20 @@ Matrix4 read_image_to_probe(const std::filesystem::path& path) {
     if (matrix == attributes.end())
       throw std::runtime_error(name + ":" + std::to_string(line) + ": the Image-to-Probe <Transform> has no Matrix");
     Matrix4 m;
-    if (!parse_matrix(matrix->second, m)) {
-      std::string shown = matrix->second.substr(0, 80);
-      if (matrix->second.size() > 80) shown += "...";
+    if (!parse_matrix(matrix->second, m))
       throw std::runtime_error(name + ":" + std::to_string(line) + ": the Image-to-Probe matrix is not 16 finite numbers: '" +
-                               shown + "'");
-    }
-    return m;
+                               shown(matrix->second) + "'");
+    // Pixels to millimetres: a rotation times the pixel size (0.001 to 10 mm), within 10 m.
+    const std::string why = implausible_transform(m, 1e-3, 10, 1e4, 0.2);
+    if (!why.empty())
+      throw std::runtime_error(name + ":" + std::to_string(line) + ": the Image-to-Probe matrix is not a calibration: " + why +
+                               " (a rotation times the pixel size in mm, 0.001 to 10)");
+    if (found)
+      throw std::runtime_error(name + ":" + std::to_string(line) + ": a second Image-to-Probe transform (the first is on line " +
+                               std::to_string(found_line) + "); keep one");
+    found = m, found_line = line;
   }
+  if (found) return *found;
   throw std::runtime_error(name + ": no <Transform From=\"Image\" To=\"Probe\" Matrix=\"...\"> element");
 }
 

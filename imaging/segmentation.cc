@@ -205,7 +205,11 @@ Mask segment_tissue(const Volume<float>& v, const TissueSegmentation& s) {
   } else {
     std::vector<float> sorted = smooth.data;
     std::sort(sorted.begin(), sorted.end());
-    t = 0.5f * (sorted[sorted.size() / 20] + sorted[sorted.size() * 19 / 20]);
+    const float low = sorted[sorted.size() / 20], high = sorted[sorted.size() * 19 / 20];
+    if (!(high > low))
+      throw std::runtime_error("no contrast to segment: 90 % of the voxels have the intensity " + std::to_string(low) +
+                               " (a blank or constant volume); give --threshold or --labels if this is meant");
+    t = 0.5f * (low + high);
   }
   const Mask region = connected_component(threshold(smooth, t, 1e30f), ComponentChoice::largest);
   return fill_holes(close(region, s.closing));

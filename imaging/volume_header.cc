@@ -6,6 +6,7 @@
 #include <zlib.h>
 
 #include <cmath>
+#include <cstdlib>
 #include <fstream>
 #include <map>
 #include <sstream>
@@ -21,6 +22,57 @@ std::string trim(std::string t) {
   t.erase(0, t.find_first_not_of(" \t\r"));
   t.erase(t.find_last_not_of(" \t\r") + 1);
   return t;
+}
+
+// A header value as quoted in a message: at most 60 characters, control and non-ASCII bytes as '?'.
+std::string shown(const std::string& text) {
+  std::string out = text.size() <= 60 ? text : text.substr(0, 57) + "...";
+  for (char& c : out)
+    if (static_cast<unsigned char>(c) < 0x20 || static_cast<unsigned char>(c) >= 0x7f) c = '?';
+  return out;
+}
+
+// What a clinical image can be (issue 17): voxels of 1 um to 100 mm, positions within 100 m, at
+// most 10^5 voxels along an axis and 2^30 values in all (4 GB as floats).
+struct Bounds {
+  double low, high;
+  const char* what;
+};
+constexpr Bounds kSpacingMm{1e-3, 100, "a voxel size in mm, 0.001 to 100"};
+constexpr Bounds kPositionMm{-1e5, 1e5, "a position in mm, within 100 m"};
+constexpr double kMaxValues = double(1u << 30);
+
+// Three numbers (a key absent: nothing to check), each finite and within `bounds`.
+void check_vector(const std::filesystem::path& path, const std::string& key, const std::string& value, const Bounds& bounds) {
+  if (value.empty()) return;
+  std::istringstream in(value);
+  int n = 0;
+  std::string word;
+  for (; in >> word; ++n) {
+    char* end = nullptr;
+    const double x = std::strtod(word.c_str(), &end);
+    if (*end != '\0' || !std::isfinite(x) || x < bounds.low || x > bounds.high || n >= 3)
+      throw std::runtime_error(path.string() + ": " + key + " = " + shown(value) + "; expected 3 numbers, each " + bounds.what);
+  }
+  if (n != 3) throw std::runtime_error(path.string() + ": " + key + " = " + shown(value) + "; expected 3 numbers, each " + bounds.what);
+}
+
+// The voxel count of three sizes (DimSize, NRRD sizes), each a whole number from 1 to 10^5.
+double checked_sizes(const std::filesystem::path& path, const std::string& key, const std::string& value) {
+  if (value.empty()) throw std::runtime_error(path.string() + ": the header has no " + key);
+  std::istringstream in(value);
+  double voxels = 1;
+  int n = 0;
+  std::string word;
+  for (; in >> word; ++n) {
+    char* end = nullptr;
+    const double d = std::strtod(word.c_str(), &end);
+    if (*end != '\0' || !(d >= 1 && d <= 1e5) || d != std::floor(d) || n >= 3)
+      throw std::runtime_error(path.string() + ": " + key + " = " + shown(value) + "; expected 3 whole numbers from 1 to 100000");
+    voxels *= d;
+  }
+  if (n != 3) throw std::runtime_error(path.string() + ": " + key + " = " + shown(value) + "; expected 3 whole numbers from 1 to 100000");
+  return voxels;
 }
 
 // The size of zlib (or gzip) data once inflated, reading at most `available` bytes from `in`;
@@ -51,6 +103,8 @@ double inflated_size(std::istream& in, double available, bool gzip) {
   return status == Z_STREAM_END ? total : -1;
 }
 
+constexpr std::size_t kMaxHeaderBytes = 64u << 20, kMaxHeaderLine = 64u << 10;
+
 // MetaImage: VTK's reader fills a short file's missing voxels with whatever it finds, so the data
 // size is checked against the header first (uncompressed data; compressed data is checked by zlib).
 }  // namespace
@@ -59,11 +113,30 @@ double inflated_size(std::istream& in, double available, bool gzip) {
 // line ElementDataFile (MetaImage) or an empty line (NRRD). `end` is the header's size in bytes.
 std::map<std::string, std::string> text_header(const std::filesystem::path& path, char separator,
                                                std::streamoff* end) {
+  std::error_code error;
+  if (!std::filesystem::is_regular_file(path, error))
+    throw std::runtime_error(path.string() + ": not a regular file (a volume is a file, not a FIFO or device)");
   std::ifstream in(path, std::ios::binary);
   std::map<std::string, std::string> keys;
   std::string line;
-  for (int n = 0; std::getline(in, line) && n < 1000; ++n) {
-    if (end) *end = in.tellg();
+  std::size_t total = 0;
+  // Bounded reads: a file without line breaks (or a huge one) is not a header.
+  const auto next_line = [&]() {
+    line.clear();
+    bool any = false;
+    for (int c; (c = in.get()) != std::char_traits<char>::eof();) {
+      any = true;
+      if (++total > kMaxHeaderBytes)
+        throw std::runtime_error(path.string() + ": a header of over 64 MB; not a MetaImage or NRRD header");
+      if (c == '\n') break;
+      if (line.size() >= kMaxHeaderLine)
+        throw std::runtime_error(path.string() + ": a header line of over 64 KB; not a MetaImage or NRRD header");
+      line.push_back(static_cast<char>(c));
+    }
+    return any;
+  };
+  while (next_line()) {
+    if (end) *end = static_cast<std::streamoff>(total);
     if (separator == ':' && trim(line).empty()) break;
     if (!line.empty() && line[0] == '#') continue;
     const auto at = line.find(separator);
@@ -79,26 +152,42 @@ void check_metaimage_size(const std::filesystem::path& path) {
   std::streamoff header = 0;
   std::map<std::string, std::string> keys = text_header(path, '=', &header);
   const auto get = [&](const std::string& key) { return keys.count(key) ? keys[key] : std::string(); };
-  std::istringstream dims(get("DimSize"));
-  double voxels = 1;
-  int n = 0;
-  for (double d; dims >> d; ++n) voxels *= d;
-  if (n == 0) throw std::runtime_error(path.string() + ": the header has no DimSize");
+  const std::string ndims = get("NDims");
+  if (!ndims.empty() && ndims != "3")
+    throw std::runtime_error(path.string() + ": NDims = " + shown(ndims) + "; a volume has 3 dimensions");
+  const double voxels = checked_sizes(path, "DimSize", get("DimSize"));
+  check_vector(path, "ElementSpacing", get("ElementSpacing"), kSpacingMm);
+  check_vector(path, "ElementSize", get("ElementSize"), kSpacingMm);
+  for (const char* key : {"Offset", "Origin", "Position"}) check_vector(path, key, get(key), kPositionMm);
   static const std::map<std::string, int> bytes{{"MET_UCHAR", 1}, {"MET_CHAR", 1},   {"MET_USHORT", 2}, {"MET_SHORT", 2},
                                                 {"MET_UINT", 4},  {"MET_INT", 4},    {"MET_FLOAT", 4},  {"MET_DOUBLE", 8},
                                                 {"MET_ULONG", 8}, {"MET_LONG", 8}};
   const auto type = bytes.find(get("ElementType"));
   if (type == bytes.end()) throw std::runtime_error(path.string() + ": unknown ElementType '" + get("ElementType") + "'");
   const std::string channels = get("ElementNumberOfChannels");
-  const double expected = voxels * type->second * (channels.empty() ? 1 : std::stod(channels));
+  double channel_count = 1;
+  if (!channels.empty()) {
+    std::istringstream in(channels);
+    std::string rest;
+    if (!(in >> channel_count) || (in >> rest) || channel_count != std::floor(channel_count) || channel_count < 1 ||
+        channel_count > 16)
+      throw std::runtime_error(path.string() + ": ElementNumberOfChannels = " + shown(channels) + "; expected 1 to 16");
+  }
+  if (voxels * channel_count > kMaxValues)
+    throw std::runtime_error(path.string() + ": " + shown(get("DimSize")) + " voxels of " + shown(channels.empty() ? "1" : channels) +
+                             " channels; at most 2^30 values fit the memory budget (4 GB as floats)");
+  const double expected = voxels * type->second * channel_count;
   const std::string data = get("ElementDataFile");
   double available = 0;
   if (data == "LOCAL") {
     available = double(std::filesystem::file_size(path)) - double(header);
   } else {
     const auto file = path.parent_path() / data;
-    if (!std::filesystem::is_regular_file(file))
+    std::error_code error;
+    if (!std::filesystem::exists(file, error))
       throw std::runtime_error(path.string() + ": its data file " + file.string() + " is missing");
+    if (!std::filesystem::is_regular_file(file, error))
+      throw std::runtime_error(path.string() + ": its data file " + file.string() + " is not a regular file (a FIFO, device or folder)");
     available = double(std::filesystem::file_size(file));
   }
   const std::string compressed = get("CompressedData");
@@ -129,24 +218,29 @@ void check_nrrd_size(const std::filesystem::path& path) {
       {"double", 8}, {"longlong", 8},      {"int64", 8},  {"uint64", 8}};
   const auto type = bytes.find(keys["type"]);
   if (type == bytes.end()) throw std::runtime_error(path.string() + ": unknown NRRD type '" + keys["type"] + "'");
-  std::istringstream sizes(keys["sizes"]);
-  double expected = type->second;
-  int n = 0;
-  for (double d; sizes >> d; ++n) expected *= d;
-  if (n == 0) throw std::runtime_error(path.string() + ": the header has no sizes");
+  if (keys.count("dimension") && keys["dimension"] != "3")
+    throw std::runtime_error(path.string() + ": dimension: " + shown(keys["dimension"]) + "; a volume has 3 dimensions");
+  const double voxels = checked_sizes(path, "sizes", keys["sizes"]);
+  if (voxels > kMaxValues)
+    throw std::runtime_error(path.string() + ": sizes " + shown(keys["sizes"]) + "; at most 2^30 voxels fit the memory budget");
+  check_vector(path, "spacings", keys["spacings"], kSpacingMm);
+  const double expected = type->second * voxels;
   const std::string encoding = keys["encoding"];
   const std::string detached = keys.count("data file") ? keys["data file"] : keys["datafile"];
   const std::filesystem::path file = detached.empty() ? path : path.parent_path() / detached;
-  if (!std::filesystem::is_regular_file(file))
-    throw std::runtime_error(path.string() + ": its data file " + file.string() + " is missing");
+  std::error_code error;
+  if (!std::filesystem::is_regular_file(file, error))
+    throw std::runtime_error(path.string() + ": its data file " + file.string() + " is missing or not a regular file");
   double available = double(std::filesystem::file_size(file)) - (detached.empty() ? double(header) : 0);
   if (encoding == "gzip" || encoding == "gz") {
     std::ifstream in(file, std::ios::binary);
     if (detached.empty()) in.seekg(header);
     available = inflated_size(in, available, true);
     if (available < 0) throw std::runtime_error(path.string() + ": its gzip data is cut short or corrupt");
-  } else if (encoding != "raw") {
+  } else if (encoding == "ascii" || encoding == "text" || encoding == "txt") {
     return;  // text encodings: VTK's reader checks as it parses
+  } else if (encoding != "raw") {
+    throw std::runtime_error(path.string() + ": encoding: " + shown(encoding) + "; expected raw, gzip or ascii");
   }
   if (available < expected)
     throw std::runtime_error(path.string() + ": sizes " + keys["sizes"] + " of " + keys["type"] + " need " +

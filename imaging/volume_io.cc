@@ -97,6 +97,8 @@ std::unique_ptr<OpenVolume> open_volume(const std::filesystem::path& path) {
   const std::string name = path.string();
   std::error_code ec;
   if (!std::filesystem::exists(path, ec)) throw std::runtime_error(name + ": no such file");
+  if (!std::filesystem::is_regular_file(path, ec))
+    throw std::runtime_error(name + ": not a regular file (a volume is a file or a folder of DICOM slices, not a FIFO or device)");
   auto v = std::make_unique<OpenVolume>();
   const std::string e = extension(path);
   if (e == ".mha" || e == ".mhd") {
@@ -275,6 +277,30 @@ Volume<float> read_dicom_series(const std::filesystem::path& folder) {
   return v;
 }
 
+// What a clinical image can be, whatever its format said (issue 17): voxels of 1 um to 100 mm, an
+// origin within 100 m, axes that span 3D, at most 2^30 voxels (4 GB as floats).
+void check_plausible(const std::filesystem::path& path, const VolumeInfo& info) {
+  const std::string name = path.string();
+  const auto triple = [](const std::array<double, 3>& v) {
+    std::ostringstream text;
+    text << v[0] << " " << v[1] << " " << v[2];
+    return text.str();
+  };
+  for (double s : info.spacing_mm)
+    if (!(s >= 1e-3 && s <= 100))
+      throw std::runtime_error(name + ": voxel size " + triple(info.spacing_mm) + " mm; each must be 0.001 to 100 mm");
+  for (double o : info.origin_mm)
+    if (!(std::abs(o) <= 1e5)) throw std::runtime_error(name + ": origin " + triple(info.origin_mm) + " mm; expected within 100 m");
+  const auto& d = info.direction;
+  const double det = d[0] * (d[4] * d[8] - d[5] * d[7]) - d[1] * (d[3] * d[8] - d[5] * d[6]) + d[2] * (d[3] * d[7] - d[4] * d[6]);
+  if (!(std::abs(det) > 0.5))
+    throw std::runtime_error(name + ": its direction (orientation) matrix has determinant " + std::to_string(det) +
+                             "; the image axes must span 3D space");
+  if (info.voxel_count() > double(1u << 30))
+    throw std::runtime_error(name + ": " + std::to_string(info.dimensions[0]) + " x " + std::to_string(info.dimensions[1]) + " x " +
+                             std::to_string(info.dimensions[2]) + " voxels; at most 2^30 fit the memory budget (4 GB as floats)");
+}
+
 VolumeInfo info_of(const std::filesystem::path& path, OpenVolume& v) {
   VolumeInfo info;
   info.format = v.format;
@@ -294,6 +320,7 @@ VolumeInfo info_of(const std::filesystem::path& path, OpenVolume& v) {
       info.scalar_type = vtkImageScalarTypeNameMacro(scalars->Get(vtkDataObject::FIELD_ARRAY_TYPE()));
   }
   read_geometry(path, v, info);
+  check_plausible(path, info);
   return info;
 }
 
@@ -339,7 +366,13 @@ Volume<float> read_volume(const std::filesystem::path& path) {
   for (int d = 0; d < 3; ++d) v.dimensions[d] = dims[d];
   v.spacing_mm = info.spacing_mm, v.origin_mm = info.origin_mm, v.direction = info.direction;
   v.data.resize(static_cast<std::size_t>(expected));
-  for (vtkIdType i = 0; i < scalars->GetNumberOfTuples(); ++i) v.data[i] = static_cast<float>(scalars->GetComponent(i, 0));
+  for (vtkIdType i = 0; i < scalars->GetNumberOfTuples(); ++i) {
+    v.data[i] = static_cast<float>(scalars->GetComponent(i, 0));
+    if (!std::isfinite(v.data[i]))
+      throw std::runtime_error(name + ": voxel (" + std::to_string(i % dims[0]) + ", " + std::to_string(i / dims[0] % dims[1]) + ", " +
+                               std::to_string(i / (vtkIdType(dims[0]) * dims[1])) + ") is " + (std::isnan(v.data[i]) ? "NaN" : "infinite") +
+                               "; an image's intensities are finite");
+  }
   return v;
 }
 

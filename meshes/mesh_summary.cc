@@ -1,5 +1,7 @@
 #include "meshes/mesh_summary.h"
 
+#include "meshes/mesh_file_checks.h"
+
 #include <gmsh.h>
 #include <vtkCallbackCommand.h>
 #include <vtkCellData.h>
@@ -40,13 +42,6 @@ std::string gmsh_element_name(int type) {
 std::mutex gmsh_mutex;
 
 MeshSummary read_gmsh(const std::string& name) {
-  {
-    std::ifstream in(name);
-    std::string first;
-    std::getline(in, first);
-    if (first.rfind("$MeshFormat", 0) != 0)
-      throw std::runtime_error(name + ":1: not a Gmsh mesh (expected $MeshFormat on the first line)");
-  }
   std::lock_guard<std::mutex> lock(gmsh_mutex);
   gmsh::initialize();
   gmsh::option::setNumber("General.Terminal", 0);
@@ -158,8 +153,7 @@ bool MeshSummary::has_group(const std::string& name) const {
 
 MeshSummary read_mesh_summary(const std::filesystem::path& path) {
   const std::string name = path.string();
-  std::error_code ec;
-  if (!std::filesystem::is_regular_file(path, ec)) throw std::runtime_error(name + ": no such file");
+  if (ends_with(name, ".msh") || ends_with(name, ".vtu")) check_mesh_file(path);
   if (ends_with(name, ".msh")) return read_gmsh(name);
   if (ends_with(name, ".vtu")) return read_vtu(name);
   throw std::runtime_error(name + ": unknown mesh format; expected .msh (Gmsh 4) or .vtu");

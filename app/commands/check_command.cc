@@ -18,6 +18,7 @@
 #include "app/json_writer.h"
 #include "app/log.h"
 #include "app/progress.h"
+#include "app/recording.h"
 #include "app/scene_mesh.h"
 #include "config/scene_loader.h"
 #include "fem/tissue_mesh.h"
@@ -144,6 +145,17 @@ SceneReport check_one(const std::string& file, bool no_mesh) {
     return report;
   }
   if (!no_mesh) check_referenced_data(report);
+  // Each probe's trajectory read and checked as a replay would (a FIFO, NaN or a unit slip is
+  // found here, not minutes into a session).
+  for (std::size_t i = 0; i < report.scene->probes.size(); ++i) {
+    const config::Probe& probe = report.scene->probes[i];
+    if (probe.device.trajectory.empty()) continue;
+    try {
+      read_probe_trajectory(probe.device.trajectory, probe.name, static_cast<int>(i));
+    } catch (const std::exception& e) {
+      report.errors.push_back(diagnostic_at(report.file, probe.where, "probes[" + std::to_string(i) + "].device.trajectory", e.what()));
+    }
+  }
   report.valid = report.errors.empty();
   return report;
 }

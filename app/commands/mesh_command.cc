@@ -223,9 +223,9 @@ void add_mesh_command(CLI::App& parent, int& exit_code) {
   cmd->add_option("--smoothing", o->smoothing, "Speckle filter before the threshold: none, gaussian or median (3x3x3)")
       ->check(CLI::IsMember({"none", "gaussian", "median"}))
       ->capture_default_str();
-  cmd->add_option("--smooth", o->smoothing_mm, "Gaussian smoothing before the threshold, mm")->capture_default_str();
+  cmd->add_option("--smooth", o->smoothing_mm, "Gaussian smoothing before the threshold, mm")->check(CLI::Range(0.0, 50.0))->capture_default_str();
   cmd->add_option("--close", o->closing, "Closing radius, voxels")->check(CLI::Range(0, 10))->capture_default_str();
-  cmd->add_option("--size", o->size_mm, "Target element size, mm")->check(CLI::PositiveNumber)->capture_default_str();
+  cmd->add_option("--size", o->size_mm, "Target element size, mm")->check(CLI::Range(0.01, 500.0))->capture_default_str();
   cmd->add_option("--refine", o->refine, "Finer elements near a point: X Y Z RADIUS SIZE (mm; grading over one more radius)")
       ->expected(5);
   cmd->add_option("--partitions", o->partitions, "METIS partitions in the .msh")->check(CLI::Range(0, 1024));

@@ -52,6 +52,7 @@ int run_phantom(const PhantomOptions& o) {
   const auto start = std::chrono::steady_clock::now();
   imaging::Phantom phantom;
   try {
+    refuse_overwriting({}, {}, o.out);  // --out must be a folder (or not exist yet)
     phantom = imaging::make_phantom(settings);
   } catch (const std::exception& e) {
     std::cerr << "error: " << e.what() << "\n";

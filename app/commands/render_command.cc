@@ -35,6 +35,7 @@
 #include "app/chart_png.h"
 #include "app/commands/commands.h"
 #include "app/exit_codes.h"
+#include "meshes/mesh_file_checks.h"
 #include "imaging/volume_io.h"
 
 namespace fetouch::app {
@@ -80,6 +81,7 @@ void write_png(vtkRenderer* renderer, const RenderOptions& o) {
 // with the element edges.
 void render_mesh(const RenderOptions& o, vtkRenderer* renderer, std::string* caption) {
   vtkNew<vtkXMLUnstructuredGridReader> reader;
+  meshes::check_mesh_file(o.input);  // a regular file whose declared sizes fit the memory budget
   if (!reader->CanReadFile(o.input.c_str())) throw std::runtime_error(o.input + ": not a VTK unstructured grid (.vtu)");
   reader->SetFileName(o.input.c_str());
   reader->Update();

@@ -141,20 +141,7 @@ class DistributedEnvironment final : public haptics::Environment {
 haptics::Trajectory probe_trajectory(const config::Probe& probe, int index, const ReplayOptions& o) {
   const fs::path file = (index == 0 && !o.trajectory.empty()) ? fs::path(o.trajectory) : probe.device.trajectory;
   if (file.empty()) throw std::runtime_error("probe " + probe.name + " has no trajectory (device.trajectory)");
-  if (file.extension() == ".h5") {
-    // A recording: this probe's positions (by name, else by order).
-    const Recording r = read_recording(file);
-    const RecordedDevice* d = nullptr;
-    for (const auto& device : r.devices)
-      if (device.name == probe.name) d = &device;
-    if (!d && index < static_cast<int>(r.devices.size())) d = &r.devices[index];
-    if (!d || d->samples.size() < 2) throw std::runtime_error(file.string() + ": no positions for probe " + probe.name);
-    haptics::Trajectory t;
-    for (const auto& s : d->samples) t.times_s.push_back(s.time_s), t.positions_m.push_back(s.position);
-    t.check(file.string() + " (probe " + d->name + ")");
-    return t;
-  }
-  return haptics::read_trajectory_csv(file);
+  return read_probe_trajectory(file, probe.name, index);
 }
 
 SessionSummary run_session(const config::Scene& scene, const ReplayOptions& o, const haptics::HapticLoopSettings& settings,

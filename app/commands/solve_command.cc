@@ -159,6 +159,13 @@ int run_solve(const SolveOptions& o) {
         std::cerr << "error: " << option << ": " << v << " is not a finite number\n";
         return kExitBadInput;
       }
+  for (std::size_t i = 0; i + 5 < o.press.size(); i += 6) {
+    const double force = std::sqrt(o.press[i + 3] * o.press[i + 3] + o.press[i + 4] * o.press[i + 4] + o.press[i + 5] * o.press[i + 5]);
+    if (force > 300) {
+      std::cerr << "error: --press: a force of " << force << " N; a probe presses with at most 300 N (forces in newtons)\n";
+      return kExitBadInput;
+    }
+  }
   std::optional<config::Scene> loaded = load_scene_or_report(o.scene);
   if (!loaded) return kExitBadInput;
   config::Scene scene = std::move(*loaded);
@@ -335,7 +342,7 @@ void add_solve_command(CLI::App& parent, int& exit_code) {
   cmd->add_option("--press", o->press, "A probe pressing: X Y Z FX FY FZ (surface point in m, force in N); repeatable")
       ->allow_extra_args(false)->expected(6)->take_all();
   cmd->add_option("--point", o->points, "Report the displacement at X Y Z (m); repeatable")->expected(3)->take_all();
-  cmd->add_option("--radius", o->radius_m, "Probe radius in m (default: the scene's first probe)")->check(CLI::PositiveNumber);
+  cmd->add_option("--radius", o->radius_m, "Probe radius in m (default: the scene's first probe)")->check(CLI::Range(1e-4, 0.05));
   cmd->add_option("--steps", o->steps, "Load steps")->check(CLI::Range(1, 1000))->capture_default_str();
   cmd->add_option("--duration", o->duration_s, "Simulated time of a scene with inertia, s (loads as a step at t = 0)")
       ->check(CLI::Range(1e-6, 1e4))->capture_default_str();

@@ -275,6 +275,11 @@ int run_stability(const StabilityOptions& o) {
               << " has none (use pi or pi_smith)\n";
     return kExitBadInput;
   }
+  for (const auto& [option, range] : {std::pair<const char*, const std::vector<double>*>{"--kh-range", &o.kh_range}, {"--ni-range", &o.ni_range}})
+    if (range->size() == 2 && !((*range)[0] < (*range)[1])) {
+      std::cerr << "error: " << option << ": MIN " << (*range)[0] << " must be below MAX " << (*range)[1] << "\n";
+      return kExitBadInput;
+    }
   const auto p = LoopParameters::scalar(kind, hold, o.ratio, o.k0, o.b0, o.kh, o.ni / o.ratio);
   if (!o.region.empty() || !o.volume.empty()) {
     double k0_max = o.k0;
@@ -390,7 +395,7 @@ void add_stability_command(CLI::App& parent, int& exit_code) {
   cmd->add_option("--rate-hz", o->rate_hz, "Haptic rate, for times in seconds")
       ->check(CLI::PositiveNumber)->capture_default_str();
   cmd->add_option("--duration", o->duration_s, "Simulated time of the step response, s")
-      ->check(CLI::PositiveNumber)->capture_default_str();
+      ->check(CLI::Range(1e-6, 3600.0))->capture_default_str();
   cmd->add_flag("--json", o->json, "Print a JSON report");
   cmd->add_option("--region", o->region, "Write the stability region over (Kh, N*I) to STEM.csv and STEM.png");
   cmd->add_option("--volume", o->volume, "Write the stability volume over K0 to STEM.csv and STEM.png");

@@ -36,6 +36,18 @@ int run_trajectory(const TrajectoryOptions& o) {
   const haptics::PathShape shape = o.shape == "slide" ? haptics::PathShape::slide
                                    : o.shape == "squeeze" ? haptics::PathShape::squeeze
                                                           : haptics::PathShape::poke;
+  // Plausible for a hand at a trainer: within 10 m of the origin, a press of at most 10 cm from at
+  // most 1 m away, each phase at most an hour.
+  const auto refuse = [](const std::string& option, const std::string& why) {
+    std::cerr << "error: " << option << ": " << why << "\n";
+    return kExitBadInput;
+  };
+  if (s.point.norm() > haptics::Trajectory::kMaxReachM) return refuse("--at", "a point more than 10 m from the origin (metres)");
+  if (!(o.depth_m >= 0 && o.depth_m <= 0.1)) return refuse("--depth", std::to_string(o.depth_m) + " m; a press is 0 to 0.1 m deep");
+  if (!(o.approach_m >= 0 && o.approach_m <= 1)) return refuse("--approach", std::to_string(o.approach_m) + " m; expected 0 to 1 m");
+  if (s.slide_m.norm() > 1) return refuse("--slide", "a slide longer than 1 m");
+  for (double t : o.times)
+    if (!(t > 0 && t <= 3600)) return refuse("--times", std::to_string(t) + " s; every duration must be above 0 and at most 3600 s");
   std::string extension = std::filesystem::path(o.out).extension().string();
   for (char& c : extension) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
   if (extension != ".csv") {  // a trajectory never replaces a scene, a mesh or a recording
