@@ -9,7 +9,11 @@ if(FETOUCH_CCACHE AND NOT CMAKE_CXX_COMPILER_LAUNCHER)
 endif()
 
 # Warnings for our own code only; applied per target by fetouch_target_defaults().
-set(FETOUCH_WARNINGS -Wall -Wextra -Wpedantic -Wshadow=local -Wno-unused-parameter)
+if(CMAKE_CXX_COMPILER_ID STREQUAL "GNU")
+  set(FETOUCH_WARNINGS -Wall -Wextra -Wpedantic -Wshadow=local -Wno-unused-parameter)
+else()  # clang (the fuzz preset)
+  set(FETOUCH_WARNINGS -Wall -Wextra -Wpedantic -Wno-unused-parameter)
+endif()
 
 if(FETOUCH_SANITIZE)
   # -fno-sanitize-recover makes any undefined behaviour fail the test that triggers it.
@@ -17,6 +21,16 @@ if(FETOUCH_SANITIZE)
                               -fno-omit-frame-pointer)
   add_compile_options(${FETOUCH_SANITIZER_FLAGS})
   add_link_options(${FETOUCH_SANITIZER_FLAGS})
+endif()
+
+# The libFuzzer harnesses (tests/fuzz, the `fuzz` preset: clang). Every library is instrumented
+# for coverage and the sanitizers; only the harnesses link libFuzzer's main.
+if(FETOUCH_FUZZ)
+  if(NOT CMAKE_CXX_COMPILER_ID STREQUAL "Clang")
+    message(FATAL_ERROR "FETOUCH_FUZZ needs clang (Debian: clang libfuzzer-14-dev); use the fuzz preset")
+  endif()
+  add_compile_options(-fsanitize=fuzzer-no-link,address,undefined -fno-sanitize-recover=all -fno-omit-frame-pointer)
+  add_link_options(-fsanitize=address,undefined)
 endif()
 
 # fetouch_target_defaults(<target>): warnings and the repository root as include directory.

@@ -197,7 +197,7 @@ TissueMeshInfo build_tissue_mesh(const config::MeshSpec& spec, Triangulation<3>&
     for (const auto& v : tria.get_vertices())
       for (int d = 0; d < 3; ++d) low[d] = std::min(low[d], v[d]), high[d] = std::max(high[d], v[d]);
     if (tria.n_vertices() == 0 || std::any_of(tria.get_vertices().begin(), tria.get_vertices().end(),
-                                              [](const Point<3>& v) { return !std::isfinite(v.norm_square()); }))
+                                              [](const Point<3>& v) { return !(std::isfinite(v[0]) && std::isfinite(v[1]) && std::isfinite(v[2])); }))
       throw std::runtime_error(spec.path.string() + ": a vertex has a coordinate that is not a finite number");
     meshes::check_mesh_extent(spec.path.string(), low, high);
   }

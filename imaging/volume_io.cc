@@ -2,6 +2,7 @@
 
 #include "imaging/volume_header.h"
 #include "imaging/volume_info.h"
+#include "imaging/vtk_message.h"
 
 #include <vtkAlgorithm.h>
 #include <vtkCallbackCommand.h>
@@ -78,9 +79,8 @@ class ReaderErrors {
   static void on_error(vtkObject*, unsigned long, void* client, void* call_data) {
     auto* self = static_cast<ReaderErrors*>(client);
     if (!call_data) return;
-    std::string text = static_cast<const char*>(call_data);
-    while (!text.empty() && (text.back() == '\n' || text.back() == ' ')) text.pop_back();
-    self->messages_ += (self->messages_.empty() ? "" : "; ") + text;
+    const std::string text = vtk_message(static_cast<const char*>(call_data));
+    if (self->messages_.size() < 300) self->messages_ += (self->messages_.empty() ? "" : "; ") + text;
   }
   std::string messages_;
   vtkNew<vtkCallbackCommand> callback_;

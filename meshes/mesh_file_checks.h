@@ -10,6 +10,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
@@ -73,9 +74,12 @@ inline void check_mesh_extent(const std::string& name, const double low[3], cons
       throw std::runtime_error(name + ": a coordinate is not a finite number");
     longest = std::max(longest, side);
   }
-  if (!(longest >= kMinMeshExtentM && longest <= kMaxMeshExtentM))
-    throw std::runtime_error(name + ": the mesh spans " + std::to_string(longest) +
+  if (!(longest >= kMinMeshExtentM && longest <= kMaxMeshExtentM)) {
+    char shown[32];
+    std::snprintf(shown, sizeof shown, "%g", longest);
+    throw std::runtime_error(name + ": the mesh spans " + std::string(shown) +
                              " m; tissue spans 0.0001 to 2 m (coordinates are in metres: a mesh in millimetres is 1000 times too large)");
+  }
 }
 
 }  // namespace fetouch::meshes

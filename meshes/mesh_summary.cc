@@ -1,5 +1,6 @@
 #include "meshes/mesh_summary.h"
 
+#include "imaging/vtk_message.h"
 #include "meshes/mesh_file_checks.h"
 
 #include <gmsh.h>
@@ -114,7 +115,7 @@ MeshSummary read_vtu(const std::string& name) {
   reader->AddObserver(vtkCommand::ErrorEvent, callback);
   reader->SetFileName(name.c_str());
   reader->Update();
-  if (!errors.text.empty()) throw std::runtime_error(name + ": " + errors.text);
+  if (!errors.text.empty()) throw std::runtime_error(name + ": " + imaging::vtk_message(errors.text));
   vtkUnstructuredGrid* grid = reader->GetOutput();
   MeshSummary summary;
   summary.format = "VTK unstructured grid";

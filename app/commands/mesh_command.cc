@@ -12,6 +12,7 @@
 #include <sstream>
 
 #include "app/commands/commands.h"
+#include "app/error_text.h"
 #include "app/exit_codes.h"
 #include "app/output_guard.h"
 #include "app/json_writer.h"
@@ -82,7 +83,7 @@ int run_mesh(const MeshOptions& o) {
     const imaging::Mask m = imaging::segment_tissue(volume, segmentation);
     mask = mask_volume(m);
   } catch (const std::exception& e) {
-    std::cerr << "error: " << e.what() << "\n";
+    std::cerr << "error: " << naming(o.volume, e.what()) << "\n";
     return kExitBadInput;
   }
   try {

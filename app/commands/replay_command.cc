@@ -13,6 +13,7 @@
 
 #include "app/build_info.h"
 #include "app/commands/commands.h"
+#include "app/error_text.h"
 #include "app/exit_codes.h"
 #include "app/json_writer.h"
 #include "app/log.h"
@@ -405,7 +406,7 @@ int run_replay(const ReplayOptions& o) {
     session_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - session_start).count();
     if (o.compare_ideal) comparison = compare_with_ideal(scene, o);
   } catch (const std::exception& e) {
-    std::cerr << "error: " << o.scene << ": " << e.what() << "\n";
+    std::cerr << "error: " << naming(o.scene, e.what()) << "\n";
     // The other ranks may be waiting in a collective call that will never come.
     if (ranks > 1) MPI_Abort(MPI_COMM_WORLD, kExitBadInput);
     return kExitBadInput;
@@ -475,7 +476,7 @@ void add_replay_command(CLI::App& parent, int& exit_code) {
       ->capture_default_str();
   cmd->add_option("--out", o->out, "Output folder")->capture_default_str();
   cmd->add_option("--mesh-every", o->mesh_every, "Frames between deformed meshes written (0: none)")
-      ->check(CLI::NonNegativeNumber)
+      ->check(CLI::Range(0, 1000000))
       ->capture_default_str();
   cmd->add_flag("--compare-ideal", o->compare_ideal,
                 "Also run the ideal reference (the solver at the haptic rate, N = 1) and every local model and\n"

@@ -43,11 +43,16 @@ int run_trajectory(const TrajectoryOptions& o) {
     return kExitBadInput;
   };
   if (s.point.norm() > haptics::Trajectory::kMaxReachM) return refuse("--at", "a point more than 10 m from the origin (metres)");
-  if (!(o.depth_m >= 0 && o.depth_m <= 0.1)) return refuse("--depth", std::to_string(o.depth_m) + " m; a press is 0 to 0.1 m deep");
-  if (!(o.approach_m >= 0 && o.approach_m <= 1)) return refuse("--approach", std::to_string(o.approach_m) + " m; expected 0 to 1 m");
+  const auto number = [](double x) {
+    std::ostringstream text;
+    text << x;
+    return text.str();
+  };
+  if (!(o.depth_m >= 0 && o.depth_m <= 0.1)) return refuse("--depth", number(o.depth_m) + " m; a press is 0 to 0.1 m deep");
+  if (!(o.approach_m >= 0 && o.approach_m <= 1)) return refuse("--approach", number(o.approach_m) + " m; expected 0 to 1 m");
   if (s.slide_m.norm() > 1) return refuse("--slide", "a slide longer than 1 m");
   for (double t : o.times)
-    if (!(t > 0 && t <= 3600)) return refuse("--times", std::to_string(t) + " s; every duration must be above 0 and at most 3600 s");
+    if (!(t > 0 && t <= 3600)) return refuse("--times", number(t) + " s; every duration must be above 0 and at most 3600 s");
   std::string extension = std::filesystem::path(o.out).extension().string();
   for (char& c : extension) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
   if (extension != ".csv") {  // a trajectory never replaces a scene, a mesh or a recording
