@@ -358,6 +358,20 @@ namespace {
 
 constexpr std::uintmax_t kMaxSceneBytes = 1u << 20;
 
+// The 0-based line of a document start marker ("---") that follows content, if any.
+std::optional<int> second_document_line(const std::string& text) {
+  std::istringstream lines(text);
+  bool content = false;
+  int number = 0;
+  for (std::string line; std::getline(lines, line); ++number) {
+    const bool marker = line.rfind("---", 0) == 0 && (line.size() == 3 || std::isspace(static_cast<unsigned char>(line[3])));
+    if (marker && content) return number;
+    const auto first = line.find_first_not_of(" \t\r");
+    if (!marker && first != std::string::npos && line[first] != '#' && line[0] != '%') content = true;
+  }
+  return std::nullopt;
+}
+
 }  // namespace
 
 LoadedScene parse_scene(const std::string& text, const std::string& label,
@@ -374,12 +388,15 @@ LoadedScene parse_scene(const std::string& text, const std::string& label,
   }
   YAML::Node root;
   try {
-    const std::vector<YAML::Node> documents = YAML::LoadAll(text);
-    if (documents.size() > 1) {
-      reader.error(documents[1].Mark(), "", "a second YAML document (after '---'); a scene file holds one");
+    // One document: a '---' line after content starts a second, which YAML::Load would drop
+    // silently. (Not YAML::LoadAll: on stray closing brackets it yields empty documents for minutes.)
+    if (const auto second = second_document_line(text)) {
+      YAML::Mark mark;
+      mark.line = *second;
+      reader.error(mark, "", "a second YAML document (after '---'); a scene file holds one");
       throw SceneError(reader.diagnostics());
     }
-    if (!documents.empty()) root.reset(documents[0]);
+    root = YAML::Load(text);
   } catch (const YAML::ParserException& error) {
     reader.error(error.mark, "", "YAML syntax: " + error.msg);
     throw SceneError(reader.diagnostics());

@@ -135,11 +135,17 @@ std::map<std::string, std::string> text_header(const std::filesystem::path& path
     }
     return any;
   };
-  while (next_line()) {
+  for (int number = 1; next_line(); ++number) {
     if (end) *end = static_cast<std::streamoff>(total);
     if (separator == ':' && trim(line).empty()) break;
     if (!line.empty() && line[0] == '#') continue;
     const auto at = line.find(separator);
+    // NRRD is strict: after the magic line, each line is "field: value" or "key:=value" (VTK's
+    // reader mis-reads "sizes:8 8 8" and crashes on what it made of it).
+    if (separator == ':' && number > 1 &&
+        (at == std::string::npos || at == 0 || at + 1 >= line.size() || (line[at + 1] != ' ' && line[at + 1] != '=')))
+      throw std::runtime_error(path.string() + ":" + std::to_string(number) + ": '" + shown(line) +
+                               "' is not a NRRD field; expected 'field: value'");
     if (at == std::string::npos) continue;
     const std::string key = trim(line.substr(0, at)), value = trim(line.substr(at + 1 + (separator == ':' && line.compare(at, 2, ":=") == 0)));
     keys[key] = value;

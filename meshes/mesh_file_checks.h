@@ -18,6 +18,8 @@
 #include <stdexcept>
 #include <string>
 
+#include "meshes/msh_check.h"
+
 namespace fetouch::meshes {
 
 // Budgets: 5 * 10^7 points and 3 * 10^8 cells (about 10 GB once read), 4 GB of file.
@@ -42,6 +44,7 @@ inline void check_mesh_file(const std::filesystem::path& path) {
   if (path.extension() == ".msh") {
     if (head.rfind("$MeshFormat", 0) != 0)
       throw std::runtime_error(name + ":1: not a Gmsh mesh (expected $MeshFormat on the first line)");
+    check_msh_structure(path);  // Gmsh's reader trusts the file; it is checked line by line first
   } else if (path.extension() == ".vtu") {
     // The counts of every <Piece> in the first 64 KB (where VTK writes them).
     in.clear();
