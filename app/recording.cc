@@ -274,12 +274,30 @@ std::vector<double> read_all(hid_t group, const std::string& name, hsize_t colum
                              (expected == 1 ? std::string("one value per row") : std::to_string(columns) + " per row") +
                              (dims[0] > kMaxRows ? " and at most 10^8 rows" : "") + " (docs/replay.md)");
   }
+  // Numbers of a standard layout: IEEE floats of 4 or 8 bytes, whole integers of 1 to 8 bytes. (A
+  // float type of another size or layout sends HDF5 into a slow element-by-element conversion.)
   const hid_t stored = H5Dget_type(dataset);
   const H5T_class_t kind = stored < 0 ? H5T_NO_CLASS : H5Tget_class(stored);
+  bool standard = false;
+  if (kind == H5T_FLOAT)
+    for (const hid_t ieee : {H5T_IEEE_F32LE, H5T_IEEE_F32BE, H5T_IEEE_F64LE, H5T_IEEE_F64BE}) standard = standard || H5Tequal(stored, ieee) > 0;
+  if (kind == H5T_INTEGER) {
+    const std::size_t bytes = H5Tget_size(stored);
+    standard = (bytes == 1 || bytes == 2 || bytes == 4 || bytes == 8) && H5Tget_precision(stored) == 8 * bytes && H5Tget_offset(stored) == 0;
+  }
   if (stored >= 0) H5Tclose(stored);
-  if (kind != H5T_FLOAT && kind != H5T_INTEGER) {
+  if (!standard) {
     H5Dclose(dataset);
-    throw std::runtime_error(file + ": dataset " + name + " does not hold numbers; a recording's datasets are floating point or integer (docs/replay.md)");
+    throw std::runtime_error(file + ": dataset " + name + " does not hold numbers of a standard type; a recording's datasets are IEEE floats or integers (docs/replay.md)");
+  }
+  // The rows must be in the file: a few kilobytes declaring 10^8 rows would have HDF5 fill gigabytes
+  // with fill values (recordings are not compressed; a 64-fold margin covers any filter).
+  std::error_code error;
+  const double file_bytes = double(std::filesystem::file_size(file, error));
+  if (double(dims[0]) * double(columns) * 8 > 64 * file_bytes + (1 << 20)) {
+    H5Dclose(dataset);
+    throw std::runtime_error(file + ": dataset " + name + " declares " + std::to_string(dims[0]) +
+                             " rows that the file does not hold (" + std::to_string(static_cast<long long>(file_bytes)) + " bytes)");
   }
   std::vector<double> values(static_cast<std::size_t>(dims[0] * columns));
   const herr_t status = values.empty() ? 0 : H5Dread(dataset, H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, values.data());

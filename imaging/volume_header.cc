@@ -6,6 +6,7 @@
 #include <zlib.h>
 
 #include <cmath>
+#include <cstdio>
 #include <cstdlib>
 #include <fstream>
 #include <map>
@@ -129,6 +130,10 @@ std::map<std::string, std::string> text_header(const std::filesystem::path& path
       if (++total > kMaxHeaderBytes)
         throw std::runtime_error(path.string() + ": a header of over 64 MB; not a MetaImage or NRRD header");
       if (c == '\n') break;
+      // A header is text: VTK's NRRD reader loops on control bytes in a field.
+      if ((c < 0x20 && c != '\t' && c != '\r') || c >= 0x7f)
+        throw std::runtime_error(path.string() + ": byte " + std::to_string(c) +
+                                 " in the header; a MetaImage or NRRD header is ASCII text");
       if (line.size() >= kMaxHeaderLine)
         throw std::runtime_error(path.string() + ": a header line of over 64 KB; not a MetaImage or NRRD header");
       line.push_back(static_cast<char>(c));
@@ -224,12 +229,39 @@ void check_nrrd_size(const std::filesystem::path& path) {
       {"double", 8}, {"longlong", 8},      {"int64", 8},  {"uint64", 8}};
   const auto type = bytes.find(keys["type"]);
   if (type == bytes.end()) throw std::runtime_error(path.string() + ": unknown NRRD type '" + keys["type"] + "'");
-  if (keys.count("dimension") && keys["dimension"] != "3")
+  // The fields NRRD requires (VTK's reader goes on without them, then crashes reading the data).
+  for (const char* field : {"type", "dimension", "sizes", "encoding"})
+    if (!keys.count(field)) throw std::runtime_error(path.string() + ": no '" + field + ":' field (NRRD requires type, dimension, sizes and encoding)");
+  if (keys["dimension"] != "3")
     throw std::runtime_error(path.string() + ": dimension: " + shown(keys["dimension"]) + "; a volume has 3 dimensions");
   const double voxels = checked_sizes(path, "sizes", keys["sizes"]);
   if (voxels > kMaxValues)
     throw std::runtime_error(path.string() + ": sizes " + shown(keys["sizes"]) + "; at most 2^30 voxels fit the memory budget");
   check_vector(path, "spacings", keys["spacings"], kSpacingMm);
+  // "space directions: (x,y,z) (x,y,z) (x,y,z)" and "space origin: (x,y,z)", parsed strictly here
+  // (VTK's reader does not stop on a malformed one).
+  for (const auto& [key, vectors] : {std::pair<const char*, int>{"space directions", 3}, {"space origin", 1}}) {
+    if (!keys.count(key)) continue;
+    std::string text = keys[key];
+    int found = 0;
+    for (std::size_t at = 0; (at = text.find_first_not_of(" \t", at)) != std::string::npos; ++found) {
+      if (text.compare(at, 4, "none") == 0 && vectors == 3) {
+        at += 4;
+        continue;
+      }
+      const std::size_t close = text.find(')', at);
+      double a, b, c;
+      char tail;
+      if (text[at] != '(' || close == std::string::npos ||
+          std::sscanf(text.substr(at + 1, close - at - 1).c_str(), " %lf , %lf , %lf %c", &a, &b, &c, &tail) != 3 ||
+          !std::isfinite(a) || !std::isfinite(b) || !std::isfinite(c))
+        throw std::runtime_error(path.string() + ": " + key + ": " + shown(text) + "; expected " + std::to_string(vectors) +
+                                 " vector(s) (x,y,z) of finite numbers");
+      at = close + 1;
+    }
+    if (found != vectors)
+      throw std::runtime_error(path.string() + ": " + key + ": " + shown(text) + "; expected " + std::to_string(vectors) + " vector(s) (x,y,z)");
+  }
   const double expected = type->second * voxels;
   const std::string encoding = keys["encoding"];
   const std::string detached = keys.count("data file") ? keys["data file"] : keys["datafile"];
