@@ -109,6 +109,15 @@ std::unique_ptr<OpenVolume> open_volume(const std::filesystem::path& path) {
     r->SetFileName(name.c_str());
     v->reader = r, v->format = "MetaImage";
   } else if (e == ".vti") {
+    {
+      // A VTK file has no document type: entity declarations only serve to expand (the billion laughs).
+      std::ifstream head(path, std::ios::binary);
+      std::string text(65536, '\0');
+      head.read(text.data(), static_cast<std::streamsize>(text.size()));
+      text.resize(static_cast<std::size_t>(head.gcount()));
+      if (text.find("<!DOCTYPE") != std::string::npos || text.find("<!ENTITY") != std::string::npos)
+        throw std::runtime_error(name + ": an XML document type or entity declaration; a VTK file has none");
+    }
     auto r = vtkSmartPointer<vtkXMLImageDataReader>::New();
     if (!r->CanReadFile(name.c_str())) throw std::runtime_error(name + ": not a VTK image data (.vti) file");
     r->SetFileName(name.c_str());

@@ -52,6 +52,9 @@ inline void check_mesh_file(const std::filesystem::path& path) {
     std::string text(65536, '\0');
     in.read(text.data(), static_cast<std::streamsize>(text.size()));
     text.resize(static_cast<std::size_t>(in.gcount()));
+    // A VTK file has no document type: entity declarations only serve to expand (the billion laughs).
+    if (text.find("<!DOCTYPE") != std::string::npos || text.find("<!ENTITY") != std::string::npos)
+      throw std::runtime_error(name + ": an XML document type or entity declaration; a VTK file has none");
     for (const auto& [key, limit] : {std::pair<const char*, double>{"NumberOfPoints=\"", kMaxMeshPoints},
                                      std::pair<const char*, double>{"NumberOfCells=\"", kMaxMeshCells}})
       for (std::size_t at = text.find(key); at != std::string::npos; at = text.find(key, at + 1)) {
