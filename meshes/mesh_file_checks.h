@@ -37,21 +37,16 @@ inline void check_mesh_file(const std::filesystem::path& path) {
     throw std::runtime_error(name + ": not a regular file (a mesh is a .msh or .vtu file, not a folder, FIFO or device)");
   if (std::filesystem::file_size(path, error) > kMaxMeshFileBytes)
     throw std::runtime_error(name + ": over 4 GB; larger than any mesh Fetouch can solve on");
+  // The first 64 KB: the first line of a .msh, the <Piece> counts of a .vtu (where VTK writes them).
   std::ifstream in(path, std::ios::binary);
-  std::string head(4096, '\0');
-  in.read(head.data(), static_cast<std::streamsize>(head.size()));
-  head.resize(static_cast<std::size_t>(in.gcount()));
+  std::string text(65536, '\0');
+  in.read(text.data(), static_cast<std::streamsize>(text.size()));
+  text.resize(static_cast<std::size_t>(in.gcount()));
   if (path.extension() == ".msh") {
-    if (head.rfind("$MeshFormat", 0) != 0)
+    if (text.rfind("$MeshFormat", 0) != 0)
       throw std::runtime_error(name + ":1: not a Gmsh mesh (expected $MeshFormat on the first line)");
     check_msh_structure(path);  // Gmsh's reader trusts the file; it is checked line by line first
   } else if (path.extension() == ".vtu") {
-    // The counts of every <Piece> in the first 64 KB (where VTK writes them).
-    in.clear();
-    in.seekg(0);
-    std::string text(65536, '\0');
-    in.read(text.data(), static_cast<std::streamsize>(text.size()));
-    text.resize(static_cast<std::size_t>(in.gcount()));
     // A VTK file has no document type: entity declarations only serve to expand (the billion laughs).
     if (text.find("<!DOCTYPE") != std::string::npos || text.find("<!ENTITY") != std::string::npos)
       throw std::runtime_error(name + ": an XML document type or entity declaration; a VTK file has none");

@@ -163,7 +163,6 @@ void check_msh_structure(const std::filesystem::path& path) {
         if (total != h[1]) in.fail(std::to_string(total) + " nodes where " + std::to_string(h[1]) + " were declared");
       } else {
         const long n = in.whole(1, 0, kMaxNodes, "the number of nodes (at most 5 * 10^7)")[0];
-        std::vector<std::pair<long, bool>> tags;
         for (long i = 0; i < n; ++i) {
           in.next("a node");
           const long tag = in.whole(1, 1, kMaxNodes * 4, "a positive node tag")[0];
