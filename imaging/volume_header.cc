@@ -105,6 +105,9 @@ double inflated_size(std::istream& in, double available, bool gzip) {
 }
 
 constexpr std::size_t kMaxHeaderBytes = 64u << 20, kMaxHeaderLine = 64u << 10;
+// MetaIO reads a key or a value into 500-byte buffers, a key into a 255-byte name and its own
+// string fields into 255-byte buffers.
+constexpr std::size_t kMaxMetaImageLine = 480, kMaxMetaImageKey = 200, kMaxMetaImageValue = 250;
 
 // MetaImage: VTK's reader fills a short file's missing voxels with whatever it finds, so the data
 // size is checked against the header first (uncompressed data; compressed data is checked by zlib).
@@ -125,7 +128,14 @@ std::map<std::string, std::string> text_header(const std::filesystem::path& path
   const auto next_line = [&]() {
     line.clear();
     bool any = false;
-    for (int c; (c = in.get()) != std::char_traits<char>::eof();) {
+    for (int c;;) {
+      if ((c = in.get()) == std::char_traits<char>::eof()) {
+        // VTK's NRRD reader loops for ever on a header whose last line has no line break.
+        if (any)
+          throw std::runtime_error(path.string() + ": the header ends without a line break after '" + shown(line) +
+                                   "' (cut short?)");
+        break;
+      }
       any = true;
       if (++total > kMaxHeaderBytes)
         throw std::runtime_error(path.string() + ": a header of over 64 MB; not a MetaImage or NRRD header");
@@ -142,8 +152,11 @@ std::map<std::string, std::string> text_header(const std::filesystem::path& path
   };
   for (int number = 1; next_line(); ++number) {
     if (end) *end = static_cast<std::streamoff>(total);
+    if (separator == ':' && number == 1 &&
+        !(trim(line).size() == 8 && trim(line).compare(0, 7, "NRRD000") == 0 && trim(line)[7] >= '1' && trim(line)[7] <= '5'))
+      throw std::runtime_error(path.string() + ":1: '" + shown(line) + "' is not a NRRD magic line; expected NRRD0001 to NRRD0005");
     if (separator == ':' && trim(line).empty()) break;
-    if (!line.empty() && line[0] == '#') continue;
+    if (separator == ':' && !line.empty() && line[0] == '#') continue;  // NRRD comments
     const auto at = line.find(separator);
     // NRRD is strict: after the magic line, each line is "field: value" or "key:=value" (VTK's
     // reader mis-reads "sizes:8 8 8" and crashes on what it made of it).
@@ -151,9 +164,36 @@ std::map<std::string, std::string> text_header(const std::filesystem::path& path
         (at == std::string::npos || at == 0 || at + 1 >= line.size() || (line[at + 1] != ' ' && line[at + 1] != '=')))
       throw std::runtime_error(path.string() + ":" + std::to_string(number) + ": '" + shown(line) +
                                "' is not a NRRD field; expected 'field: value'");
+    // MetaImage is strict too: VTK's MetaIO takes a line without '=' as a key whose value is the next
+    // line (the data's first bytes, past ElementDataFile) and copies a key of over 254 characters
+    // into a 255-byte field name (a fortified abort; found by fuzz_sweep).
+    if (separator == '=' && !trim(line).empty()) {
+      const auto colon = line.find(':');
+      if (at == std::string::npos || (colon != std::string::npos && colon < at) || trim(line.substr(0, at)).empty())
+        throw std::runtime_error(path.string() + ":" + std::to_string(number) + ": '" + shown(line) +
+                                 "' is not a MetaImage field; expected 'Key = Value'");
+      if (trim(line.substr(0, at)).size() > kMaxMetaImageKey)
+        throw std::runtime_error(path.string() + ":" + std::to_string(number) + ": a key of " +
+                                 std::to_string(trim(line.substr(0, at)).size()) + " characters ('" + shown(line) +
+                                 "'); MetaImage keys have at most " + std::to_string(kMaxMetaImageKey));
+      // MetaIO copies its own string fields (ObjectType, Comment, Name, ...) into 255-byte buffers;
+      // only PLUS's per-frame fields (Seq_Frame...), which it keeps as its own strings, may be longer.
+      const std::string value = trim(line.substr(at + 1));
+      if (value.size() > kMaxMetaImageValue && trim(line.substr(0, at)).rfind("Seq_Frame", 0) != 0)
+        throw std::runtime_error(path.string() + ":" + std::to_string(number) + ": a value of " +
+                                 std::to_string(value.size()) + " characters ('" + shown(line) +
+                                 "'); MetaImage values have at most " + std::to_string(kMaxMetaImageValue));
+      if (line.size() > kMaxMetaImageLine)
+        throw std::runtime_error(path.string() + ":" + std::to_string(number) + ": a header line of " +
+                                 std::to_string(line.size()) + " characters; MetaImage reads at most " +
+                                 std::to_string(kMaxMetaImageLine));
+    }
     if (at == std::string::npos) continue;
     const std::string key = trim(line.substr(0, at)), value = trim(line.substr(at + 1 + (separator == ':' && line.compare(at, 2, ":=") == 0)));
-    keys[key] = value;
+    // A field given twice: this parser and VTK's could each believe a different one.
+    if (!keys.emplace(key, value).second)
+      throw std::runtime_error(path.string() + ":" + std::to_string(number) + ": '" + shown(key) +
+                               "' is given a second time; a header names each field once");
     if (key == "ElementDataFile") break;  // MetaImage's last header line
   }
   return keys;

@@ -102,10 +102,11 @@ std::unique_ptr<OpenVolume> open_volume(const std::filesystem::path& path) {
   auto v = std::make_unique<OpenVolume>();
   const std::string e = extension(path);
   if (e == ".mha" || e == ".mhd") {
+    // Checked before VTK looks at it at all: CanReadFile already runs MetaIO's header parser.
+    check_metaimage_size(path);
     auto r = vtkSmartPointer<vtkMetaImageReader>::New();
     if (!r->CanReadFile(name.c_str()))
       throw std::runtime_error(name + ": not a MetaImage file (no readable ObjectType/NDims header)");
-    check_metaimage_size(path);
     r->SetFileName(name.c_str());
     v->reader = r, v->format = "MetaImage";
   } else if (e == ".vti") {

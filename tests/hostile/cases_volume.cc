@@ -132,6 +132,11 @@ std::vector<Case> volume_cases() {
   c.push_back(volume("EmptyVolume", "unclear", "truncated", "tissue.mha", [] { return std::string(); }));
   c.push_back(volume("GarbageVolume", "unclear", "malformed", "tissue.mha", [] { return garbage(4096, 9); }));
   c.push_back(volume("HeaderLineOfAMegabyte", "hang", "huge", "tissue.mha", [] { return "ObjectType = " + std::string(1u << 20, 'I') + "\n" + mha(); }));
+  // MetaIO reads a line without '=' as a key whose value is the next line, so ElementDataFile is
+  // lost and the voxels are read as keys; a key of over 254 characters overflows its field name.
+  c.push_back(header_edit("LineWithoutEquals", "crash", "malformed", "BinaryData = True\n", "BinaryData = True\nNDK\n"));
+  c.push_back(header_edit("KeyOfThreeHundredCharacters", "crash", "huge", "BinaryData = True\n",
+                          "BinaryData = True\n" + std::string(300, 'K') + " = 1\n"));
   c.push_back(volume("UnknownExtension", "unclear", "name", "tissue.png", [] { return mha(); }));
   // Detached data.
   c.push_back({"DataFileMissing", "volume", "unclear", "special file", [](const fs::path& dir) {
@@ -170,6 +175,9 @@ std::vector<Case> volume_cases() {
   c.push_back(volume("NrrdUnknownEncoding", "unclear", "malformed", "tissue.nrrd", [] { return nrrd("encoding: raw", "encoding: zstd"); }));
   c.push_back(volume("NrrdGzipGarbage", "crash", "malformed", "tissue.nrrd", [] { return nrrd("encoding: raw", "encoding: gzip"); }));
   c.push_back(volume("NrrdSizesHuge", "hang", "huge", "tissue.nrrd", [] { return nrrd("sizes: 16 16 16", "sizes: 100000 100000 100000"); }));
+  c.push_back(volume("NrrdTextHeaderCutMidLine", "hang", "truncated", "tissue.nrrd", [] {
+    return std::string("NRRD0004\ntype: uchar\ndimension: 3\nsizes: 8 8 8\nencoding: ascii\nspacings: 1 1");
+  }));
   c.push_back(volume("NrrdNoMagic", "unclear", "malformed", "tissue.nrrd", [] { return nrrd("NRRD0004", "NRRX0004"); }));
   c.push_back(volume("VtiTruncated", "unclear", "truncated", "tissue.vti", [] {
     return std::string("<?xml version=\"1.0\"?>\n<VTKFile type=\"ImageData\" version=\"0.1\">\n  <ImageData WholeExtent=\"0 15 0 15 0 15\" Origin=\"0 0 0\" Spacing=\"1 1 1\">\n    <Piece Extent=\"0 15");
@@ -196,6 +204,8 @@ std::vector<Case> volume_cases() {
   c.push_back(sweep_case("SweepPoseOfTwelveNumbers", "unclear", "wrong shape", "1 0 0 0 0 1 0 0 0 0 1 2 0 0 0 1", "1 0 0 0 0 1 0 0 0 0 1 2"));
   c.push_back(sweep_case("SweepPoseA1e300Shift", "nonsense", "absurd", "1 0 0 0 0 1 0 0 0 0 1 2 0 0 0 1", "1 0 0 0 0 1 0 0 0 0 1 1e300 0 0 0 1"));
   c.push_back(sweep_case("SweepPoseNotRigid", "nonsense", "absurd", "1 0 0 0 0 1 0 0 0 0 1 2 0 0 0 1", "1000 0 0 0 0 1 0 0 0 0 1 2 0 0 0 1"));
+  c.push_back(sweep_case("SweepLineWithoutEquals", "crash", "malformed", "Seq_Frame0000_ProbeToTrackerTransformStatus = OK\n",
+                         "Seq_Frame0000_ProbeToTrackerTransformStatus = OK\nNDK\n"));
   c.push_back(sweep_case("SweepOfAMillionFrames", "hang", "huge", "DimSize = 8 8 3", "DimSize = 8 8 1000000"));
   c.push_back({"SweepIsAFifo", "volume", "hang", "special file", [](const fs::path& dir) {
                  make_fifo(dir / "sweep.igs.mha");
