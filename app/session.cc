@@ -85,13 +85,14 @@ class SessionBase {
   int devices() const { return m_; }
 
   // One device's tick as recorded (tick k; `last` is its point at tick k - 1).
+  // `sent`: the force the device was given (Device::write's answer).
   void sample(long k, const Eigen::Vector3d& point, const Eigen::Vector3d& last, const haptics::ContactOutput& out,
-              DeviceSample& s) const {
+              const Eigen::Vector3d& sent, DeviceSample& s) const {
     const double period = settings_.loop.period_s;
     s.time_s = k * period;
     s.position = point;
     s.velocity = k == 0 ? Eigen::Vector3d::Zero() : Eigen::Vector3d((point - last) / period);
-    s.force = out.force;
+    s.force = sent;
     s.proxy = out.proxy;
     s.penetration = out.penetration;
     s.normal_force = out.normal_force;
@@ -162,8 +163,7 @@ SessionSummary run_lockstep(haptics::Environment& environment, std::vector<std::
   const std::size_t batch = 1000;
   std::vector<std::vector<DeviceSample>> pending(static_cast<std::size_t>(m), std::vector<DeviceSample>(batch));
   std::size_t filled = 0;
-  std::vector<Eigen::Vector3d> points(static_cast<std::size_t>(m)), last_points(static_cast<std::size_t>(m)),
-      forces(static_cast<std::size_t>(m), Eigen::Vector3d::Zero());
+  std::vector<Eigen::Vector3d> points(static_cast<std::size_t>(m)), last_points(static_cast<std::size_t>(m));
   // The buffered ticks to the summary and the recording (flushed every flush_period_s of wall time).
   const auto drain = [&] {
     for (int d = 0; d < m; ++d) base.take_ticks(d, pending[d].data(), filled);
@@ -172,13 +172,12 @@ SessionSummary run_lockstep(haptics::Environment& environment, std::vector<std::
   };
 
   for (long k = 0; k < ticks; ++k) {
-    for (int d = 0; d < m; ++d) points[d] = devices[d]->next(forces[d]);
+    for (int d = 0; d < m; ++d) points[d] = devices[d]->read().position_m;
     // The tick; after one that started a frame the environment answers at once (lockstep), and
     // its update is held from the next frame's first tick.
     const std::vector<haptics::ContactOutput>& out = session.tick(points);
     for (int d = 0; d < m; ++d) {
-      forces[d] = out[d].force;
-      base.sample(k, points[d], last_points[d], out[d], pending[d][filled]);
+      base.sample(k, points[d], last_points[d], out[d], devices[d]->write(out[d].force), pending[d][filled]);
       last_points[d] = points[d];
     }
     ++filled;
@@ -213,6 +212,7 @@ void advance(timespec& t, long nanoseconds) {
 }
 
 constexpr long kSpinNs = 100'000;  // the haptic thread spins the last 100 us before each deadline
+constexpr double kRampOutS = 0.2;  // a stopped session's force ramps out over this time
 
 // The cores the session's threads run on: the haptic thread alone on the last one, the rest for
 // the solver (its assembly threads and factorisation worker follow it) and the I/O thread. None
@@ -275,7 +275,7 @@ SessionSummary run_realtime(haptics::Environment& environment, std::vector<std::
   long ran = 0;  // ticks the haptic thread ran (read after it joined)
   std::mutex frames_mutex;  // between the solver and I/O threads only
   std::vector<FrameRecord> frames;
-  std::exception_ptr solver_error, io_error;
+  std::exception_ptr solver_error, io_error, haptic_error;
 
   timespec origin{};
   clock_gettime(CLOCK_MONOTONIC, &origin);
@@ -283,19 +283,93 @@ SessionSummary run_realtime(haptics::Environment& environment, std::vector<std::
 
   const CoreSplit cores = CoreSplit::make(settings.pin_haptic_core);
   std::atomic<int> haptic_core{-1};
+  // Stopping (a request, or a device's fault): the force ramps out over kRampOutS, then the
+  // session ends. A fault is reported once the threads have joined.
+  const long ramp_out_ticks = std::max<long>(1, std::lround(kRampOutS / period));
+  long stop_tick = -1;
+  const char* fault = nullptr;
+  int fault_device = -1;
+  SessionMonitor* const monitor = settings.monitor;
+  std::vector<Eigen::Vector3d> points(static_cast<std::size_t>(m)), last(static_cast<std::size_t>(m));
+  std::vector<DeviceSample> block(static_cast<std::size_t>(m));
+  timespec deadline = origin, now{};
+  double previous_start = -1;
+  haptics::ServoClock* servo = nullptr;
+  for (const auto& d : devices)
+    if (!servo) servo = d->servo_clock();
+  // One tick, on the haptic thread's clock or in a driver's servo callback; false: the session is over.
+  long k = 0;
+  const auto tick = [&]() noexcept -> bool {
+    if (k >= ticks) return false;
+    clock_gettime(CLOCK_MONOTONIC, &now);
+    starts[k] = seconds_between(origin, now);
+    // On a driver's clock, a tick is late when it starts more than a period after the last one.
+    lateness[k] = servo ? (previous_start < 0 ? 0 : std::max(0.0, starts[k] - previous_start - period))
+                        : seconds_between(deadline, now);
+    previous_start = starts[k];
+    if (servo && k == 0 && cores.pin_haptic()) haptic_core = cores.haptic;  // the driver's thread, on the haptic core
+    if (servo && lateness[k] > 0.5 * period) tick_overruns.fetch_add(1, std::memory_order_relaxed);
+    for (int d = 0; d < m; ++d) points[d] = devices[d]->read().position_m;
+    const std::vector<haptics::ContactOutput>& out = loop.tick(points);
+    if (stop_tick < 0 && settings.stop && settings.stop->load(std::memory_order_relaxed)) stop_tick = k;
+    for (int d = 0; d < m && stop_tick < 0; ++d)
+      if (const char* f = devices[d]->fault()) fault = f, fault_device = d, stop_tick = k;
+    const double scale = stop_tick < 0 ? 1.0 : std::max(0.0, 1.0 - double(k - stop_tick + 1) / double(ramp_out_ticks));
+    for (int d = 0; d < m; ++d) {
+      base.sample(k, points[d], last[d], out[d], devices[d]->write(scale * out[d].force), block[d]);
+      last[d] = points[d];
+      if (monitor && d < SessionMonitor::kMaxDevices) monitor->force_n[d].store(block[d].force.norm(), std::memory_order_relaxed);
+    }
+    if (monitor) {
+      monitor->ticks.store(k + 1, std::memory_order_relaxed);
+      if (lateness[k] > period) monitor->late_ticks.fetch_add(1, std::memory_order_relaxed);
+    }
+    if (!ring.push(block.data(), block.size())) dropped.fetch_add(1, std::memory_order_relaxed);
+    if (loop.decimated()) {
+      FrameRequest& r = requests.back();
+      r.frame = loop.frame();
+      std::copy(loop.samples().begin(), loop.samples().end(), r.samples.begin());
+      if (!requests.publish()) skipped.fetch_add(1, std::memory_order_relaxed);
+    }
+    ran = ++k;
+    return k < ticks && !stopping.load(std::memory_order_relaxed) && !(stop_tick >= 0 && scale == 0);
+  };
   std::thread haptic([&] {
+    if (servo) {
+      // The driver's servo thread runs the ticks; this thread waits for the session's end.
+      using Tick = decltype(tick);
+      std::atomic<bool> over{false};
+      struct Context {
+        Tick* tick;
+        std::atomic<bool>* over;
+      } context{&tick, &over};
+      try {
+        servo->start(
+            [](void* c) noexcept {
+              auto* x = static_cast<Context*>(c);
+              if (x->over->load(std::memory_order_relaxed)) return false;
+              if (!(*x->tick)()) x->over->store(true);
+              return !x->over->load(std::memory_order_relaxed);
+            },
+            &context);
+      } catch (...) {
+        haptic_error = std::current_exception();
+        stopping = true;
+      }
+      while (!haptic_error && !over.load() && !stopping.load()) std::this_thread::sleep_for(std::chrono::milliseconds(1));
+      servo->stop();
+      haptic_done = true;
+      return;
+    }
     if (cores.pin_haptic()) haptic_core = cores.haptic;
     if (settings.realtime_priority) {
       sched_param p{};
       p.sched_priority = std::min(80, sched_get_priority_max(SCHED_FIFO));
       priority_granted = pthread_setschedparam(pthread_self(), SCHED_FIFO, &p) == 0;
     }
-    std::vector<Eigen::Vector3d> points(static_cast<std::size_t>(m)), last(static_cast<std::size_t>(m)),
-        forces(static_cast<std::size_t>(m), Eigen::Vector3d::Zero());
-    std::vector<DeviceSample> block(static_cast<std::size_t>(m));
     prctl(PR_SET_TIMERSLACK, 1UL, 0, 0, 0);  // wake-ups on time, not up to 50 us late
-    timespec deadline = origin, wake{}, now{};
-    for (long k = 0; k < ticks && !stopping.load(std::memory_order_relaxed); ++k) {
+    timespec wake{};
+    for (bool more = true; more;) {
       // Sleep to just before the deadline, then spin the last stretch: the sleep's own wake-up
       // latency (tens of microseconds on a virtual machine) is spent spinning, not late.
       wake = deadline;
@@ -304,22 +378,7 @@ SessionSummary run_realtime(haptics::Environment& environment, std::vector<std::
       }
       do clock_gettime(CLOCK_MONOTONIC, &now);
       while (seconds_between(deadline, now) < 0);
-      starts[k] = seconds_between(origin, now);
-      lateness[k] = seconds_between(deadline, now);
-      for (int d = 0; d < m; ++d) points[d] = devices[d]->next(forces[d]);
-      const std::vector<haptics::ContactOutput>& out = loop.tick(points);
-      for (int d = 0; d < m; ++d) {
-        forces[d] = out[d].force;
-        base.sample(k, points[d], last[d], out[d], block[d]);
-        last[d] = points[d];
-      }
-      if (!ring.push(block.data(), block.size())) dropped.fetch_add(1, std::memory_order_relaxed);
-      if (loop.decimated()) {
-        FrameRequest& r = requests.back();
-        r.frame = loop.frame();
-        std::copy(loop.samples().begin(), loop.samples().end(), r.samples.begin());
-        if (!requests.publish()) skipped.fetch_add(1, std::memory_order_relaxed);
-      }
+      more = tick();
       advance(deadline, period_ns);
       clock_gettime(CLOCK_MONOTONIC, &now);
       const double behind = seconds_between(deadline, now);
@@ -327,7 +386,6 @@ SessionSummary run_realtime(haptics::Environment& environment, std::vector<std::
       // More than two periods behind (the thread was descheduled): start the schedule afresh
       // rather than run a burst of late ticks.
       if (behind > 2 * period) deadline = now;
-      ran = k + 1;
     }
     haptic_done = true;
   });
@@ -343,9 +401,9 @@ SessionSummary run_realtime(haptics::Environment& environment, std::vector<std::
         }
         const FrameRequest& r = requests.front();
         const haptics::FrameSlot& slot = loop.fill_answer(environment, r.samples, r.frame);
-        timespec now{};
-        clock_gettime(CLOCK_MONOTONIC, &now);
-        const double arrived = seconds_between(origin, now);
+        timespec answered{};
+        clock_gettime(CLOCK_MONOTONIC, &answered);
+        const double arrived = seconds_between(origin, answered);
         const FrameRecord f = frame_record(slot, arrived);
         loop.publish();
         {
@@ -394,15 +452,20 @@ SessionSummary run_realtime(haptics::Environment& environment, std::vector<std::
   haptic.join();
   solver.join();
   io.join();
+  if (haptic_error) std::rethrow_exception(haptic_error);
   if (solver_error) std::rethrow_exception(solver_error);
   if (io_error) std::rethrow_exception(io_error);
 
   SessionSummary summary = base.finish();
+  if (fault) summary.fault = fault, summary.fault_device = fault_device;
+  summary.ticks = ran;
+  summary.stopped = stop_tick >= 0;
+  for (const auto& d : devices) summary.recoverable_errors.push_back(d->recoverable_errors());
   TimingSummary& t = summary.timing;
   starts.resize(static_cast<std::size_t>(ran));
   lateness.resize(static_cast<std::size_t>(ran));
   std::vector<double> periods;
-  for (std::size_t k = 1; k < starts.size(); ++k) periods.push_back(starts[k] - starts[k - 1]);
+  for (std::size_t i = 1; i < starts.size(); ++i) periods.push_back(starts[i] - starts[i - 1]);
   spread(periods, t.period_p50_s, t.period_p99_s, t.period_max_s);
   spread(lateness, t.lateness_p50_s, t.lateness_p99_s, t.lateness_max_s);
   t.tick_overruns = tick_overruns;

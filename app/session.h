@@ -10,9 +10,15 @@
 //     I/O thread draining the ticks from a lock-free ring into the recording and flushing it. A
 //     solve that outlasts its frame is an overrun: its answer is applied at the first frame start
 //     after it arrives, and the hold simply lasts longer. When every solve finishes within its
-//     frame the forces are those of the lockstep clock, bit for bit.
+//     frame the forces are those of the lockstep clock, bit for bit. When a device owns the servo
+//     clock (a PHANTOM: Device::servo_clock), the ticks run in its driver's servo callback instead
+//     of on the haptic thread's clock. A stop request (SessionSettings::stop) or a device's fault
+//     ramps every force out over 0.2 s and ends the session; the recording is closed intact.
+// Each tick reads every device, runs the loop, and writes each device's force; what a device says
+// it was sent (Device::write) is what is recorded.
 #pragma once
 
+#include <atomic>
 #include <filesystem>
 #include <functional>
 #include <memory>
@@ -26,6 +32,14 @@
 #include "haptics/haptic_loop.h"
 
 namespace fetouch::app {
+
+// Live figures of a real-time session for a status line, written by the tick (relaxed atomics: no
+// lock, no allocation) and read by anyone.
+struct SessionMonitor {
+  static constexpr int kMaxDevices = 16;
+  std::atomic<long> ticks{0}, late_ticks{0};
+  std::atomic<double> force_n[kMaxDevices] = {};  // the force each device was last sent (magnitude)
+};
 
 struct SessionSettings {
   haptics::HapticLoopSettings loop;
@@ -43,6 +57,10 @@ struct SessionSettings {
   // Real time on a machine with 2 or more cores: the haptic thread on the last core alone, the
   // solver and I/O threads (and the threads they start) on the others.
   bool pin_haptic_core = true;
+  // Real time: set (by a signal handler, say) to end the session; the forces then ramp out over
+  // 0.2 s. A device's fault (Device::fault) ends it the same way.
+  const std::atomic<bool>* stop = nullptr;
+  SessionMonitor* monitor = nullptr;  // real time: live figures (optional)
 };
 
 // Real-time figures (zero in lockstep).
@@ -67,6 +85,10 @@ struct SessionSummary {
   long frames_with_unstable_gains = 0;
   std::vector<std::vector<Eigen::Vector3d>> forces;  // per device, per tick (keep_forces)
   TimingSummary timing;
+  bool stopped = false;                  // ended by a stop request or a fault, not by its end
+  std::string fault;                     // the device fault that ended it (empty: none)
+  int fault_device = -1;                 // which device had it
+  std::vector<long> recoverable_errors;  // per device: recoverable errors (force errors) seen
 };
 
 // Runs until the devices finish (or max_ticks). Allocation happens only outside the tick.

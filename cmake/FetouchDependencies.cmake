@@ -17,6 +17,7 @@ if(NOT HDF5_IS_PARALLEL)
 endif()
 # zlib: checking compressed volume data (imaging/volume_io.cc) before VTK reads it.
 find_package(ZLIB REQUIRED)
+find_package(Threads REQUIRED)
 
 find_package(VTK 9 REQUIRED COMPONENTS
   CommonCore CommonDataModel CommonExecutionModel

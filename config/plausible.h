@@ -31,6 +31,9 @@ inline const Range watchdog_timeout_s{0, 10, true, false, "up to 10 s"};
 inline const Range gain_n_per_m{0, 1e6, true, false, "up to 10^6 N/m: stiffer than any device renders"};
 inline const Range hand_mass_kg{0, 10, true, false, "up to 10 kg"};
 inline const Range hand_stiffness_n_per_m{0, 1e5, true, false, "up to 10^5 N/m"};
+inline const Range workspace_scale{0, 100, true, false, "up to 100 scene metres per device metre"};
+inline const Range workspace_offset_m{-10, 10, false, false, "within 10 m of the scene's origin"};
+inline const Range device_button{0, 31, false, false, "a button number from 0 to 31"};
 inline const Range hand_damping_n_s_per_m{0, 1e3, false, false, "up to 1000 N s/m"};
 // Accuracy.
 inline const Range accuracy_position_m{0, 0.01, true, false, "up to 1 cm"};

@@ -219,6 +219,14 @@ struct Device {
   std::filesystem::path trajectory;  // replay and operator: CSV (t, x, y, z) or a recording (.h5)
   HandModel hand;                    // operator only
   std::string phantom_name;          // phantom only: the HD device name, empty for the default
+  std::string library;               // phantom only: libHD.so to load (empty: $FETOUCH_LIBHD or libHD.so)
+  // Hardware only: the device frame in the scene (docs/devices.md): the device's axes in the scene
+  // frame (the rotation's columns), scene metres per device metre, the device origin's place.
+  Vec3 x_axis{1, 0, 0}, y_axis{0, 1, 0}, z_axis{0, 0, 1};
+  double scale = 1;
+  Vec3 offset_m{0, 0, 0};
+  int engage_button = -1;  // -1: engaged from the start
+  int clutch_button = -1;  // -1: no clutch
 };
 
 struct Probe {

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <set>
+#include <tuple>
 #include <string>
 
 #include "config/plausible.h"
@@ -121,10 +122,51 @@ bool valid_name(const std::string& name) {
 
 namespace {
 
+// A hardware device's workspace mapping and buttons: the axes must form a rotation (orthonormal,
+// right-handed, to 1e-3), the buttons differ.
+void read_workspace(MapView& device, Device& out) {
+  Reader& reader = device.reader();
+  if (device.has("workspace")) {
+    const Entry w = device.entry("workspace");
+    MapView map(reader, w.value, w.path, w.key_mark, {"x_axis", "y_axis", "z_axis", "scale", "offset_m"});
+    if (map.valid()) {
+      bool axes = map.vec3("x_axis", out.x_axis);
+      axes = map.vec3("y_axis", out.y_axis) || axes;
+      axes = map.vec3("z_axis", out.z_axis) || axes;
+      const auto dot = [](const Vec3& a, const Vec3& b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; };
+      const Vec3 &x = out.x_axis, &y = out.y_axis, &z = out.z_axis;
+      const Vec3 cross{x[1] * y[2] - x[2] * y[1], x[2] * y[0] - x[0] * y[2], x[0] * y[1] - x[1] * y[0]};
+      double worst = 0;
+      for (const auto& [a, b, want] : {std::tuple{x, x, 1.0}, {y, y, 1.0}, {z, z, 1.0}, {x, y, 0.0}, {y, z, 0.0}, {x, z, 0.0}})
+        worst = std::max(worst, std::abs(dot(a, b) - want));
+      if (axes && (!(worst <= 1e-3) || !(dot(cross, z) > 0)))
+        reader.error(w.value_mark, w.path,
+                     "x_axis, y_axis and z_axis are the device's axes in the scene frame: unit vectors at right "
+                     "angles, right-handed (z = x cross y), each to 1e-3; these are not");
+      map.number("scale", out.scale, plausible::workspace_scale);
+      if (map.vec3("offset_m", out.offset_m))
+        for (double c : out.offset_m)
+          if (!plausible::workspace_offset_m.contains(c)) {
+            const Entry o = map.entry("offset_m");
+            reader.error(o.value_mark, o.path, "the offset must lie " + std::string(plausible::workspace_offset_m.why));
+            break;
+          }
+    }
+  }
+  device.integer("engage_button", out.engage_button, plausible::device_button);
+  device.integer("clutch_button", out.clutch_button, plausible::device_button);
+  if (out.engage_button >= 0 && out.engage_button == out.clutch_button) {
+    const Entry c = device.entry("clutch_button");
+    reader.error(c.value_mark, c.path, "the clutch and engage buttons must differ (both are " +
+                                            std::to_string(out.clutch_button) + ")");
+  }
+}
+
 void read_device(MapView& probe, Device& out) {
   const Entry e = probe.entry("device");
   Reader& reader = probe.reader();
-  MapView map(reader, e.value, e.path, e.key_mark, {"type", "trajectory", "hand", "name"});
+  MapView map(reader, e.value, e.path, e.key_mark,
+              {"type", "trajectory", "hand", "name", "library", "workspace", "engage_button", "clutch_button"});
   if (!map.valid()) return;
   if (!map.choice("type", out.type, kDevices, Need::required)) return;
   const std::vector<std::string> trajectory_kinds{".csv", ".h5"};
@@ -149,11 +191,16 @@ void read_device(MapView& probe, Device& out) {
     case DeviceType::phantom:
       reject_keys(map, {"trajectory", "hand"}, "by a PHANTOM device");
       map.text("name", out.phantom_name);
+      map.text("library", out.library);
+      read_workspace(map, out);
       break;
     case DeviceType::mouse:
-      reject_keys(map, {"trajectory", "hand", "name"}, "by the mouse");
+      reject_keys(map, {"trajectory", "hand", "name", "library"}, "by the mouse");
+      read_workspace(map, out);
       break;
   }
+  if (out.type == DeviceType::replay || out.type == DeviceType::operator_model)
+    reject_keys(map, {"library", "workspace", "engage_button", "clutch_button"}, "by a device without hardware");
 }
 
 }  // namespace
@@ -174,7 +221,7 @@ void read_probes(MapView& scene, std::vector<Probe>& out) {
                      std::to_string(plausible::kMaxProbes) + " (one per hand at a trainer)");
     return;
   }
-  std::set<std::string> names;
+  std::set<std::string> names, phantoms;
   for (size_t i = 0; i < e.value.size(); ++i) {
     const YAML::Node item = e.value[i];
     MapView map(reader, item, e.path + "[" + std::to_string(i) + "]", item.Mark(),
@@ -194,6 +241,14 @@ void read_probes(MapView& scene, std::vector<Probe>& out) {
     map.number("radius_m", probe.radius_m, plausible::probe_radius_m);
     map.require("device", "where the probe's positions come from");
     if (map.has("device")) read_device(map, probe.device);
+    if (probe.device.type == DeviceType::phantom &&
+        !phantoms.insert(probe.device.library + "\n" + probe.device.phantom_name).second) {
+      const Entry d = map.entry("device");
+      reader.error(d.value_mark, d.path,
+                   "a second probe on " + (probe.device.phantom_name.empty() ? std::string("the default PHANTOM")
+                                                                            : "the PHANTOM '" + probe.device.phantom_name + "'") +
+                       "; each probe needs its own device (give each a device.name)");
+    }
     out.push_back(probe);
   }
 }

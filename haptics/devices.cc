@@ -171,14 +171,19 @@ Trajectory scripted_path(PathShape shape, const PathSettings& s) {
   return t;
 }
 
-ReplayDevice::ReplayDevice(const Trajectory& trajectory, double period_s) : points_(trajectory.resampled(period_s)) {
+ReplayDevice::ReplayDevice(const Trajectory& trajectory, double period_s)
+    : points_(trajectory.resampled(period_s)), period_s_(period_s) {
   if (points_.empty()) throw std::invalid_argument("replay: an empty trajectory");
 }
 
-Eigen::Vector3d ReplayDevice::next(const Eigen::Vector3d&) noexcept {
-  const long i = std::min<long>(tick_, static_cast<long>(points_.size()) - 1);
+DeviceState ReplayDevice::read() noexcept {
+  const long last = static_cast<long>(points_.size()) - 1;
+  const long i = std::min<long>(tick_, last), before = std::min<long>(std::max<long>(tick_ - 1, 0), last);
   ++tick_;
-  return points_[static_cast<std::size_t>(i)];
+  DeviceState s;
+  s.position_m = points_[static_cast<std::size_t>(i)];
+  s.velocity_m_per_s = (s.position_m - points_[static_cast<std::size_t>(before)]) / period_s_;
+  return s;
 }
 
 namespace {
@@ -224,11 +229,11 @@ VirtualOperator::VirtualOperator(const Trajectory& trajectory, const HandParamet
   velocity_.setZero();
 }
 
-Eigen::Vector3d VirtualOperator::next(const Eigen::Vector3d& rendered_force) noexcept {
+DeviceState VirtualOperator::read() noexcept {
   if (tick_ > 0) {
     // Over the last tick: its target and the force rendered at it, held.
     const std::size_t k = static_cast<std::size_t>(std::min<long>(tick_ - 1, static_cast<long>(targets_.size()) - 1));
-    const Eigen::Vector3d force = rendered_force.allFinite() ? rendered_force : Eigen::Vector3d::Zero();
+    const Eigen::Vector3d force = force_.allFinite() ? force_ : Eigen::Vector3d::Zero();
     const Eigen::Vector3d u = stiffness_ * targets_[k] + damping_ * target_velocities_[k] + force;
     for (int d = 0; d < 3; ++d) {
       const double x = phi_(0, 0) * position_[d] + phi_(0, 1) * velocity_[d] + gamma_[0] * u[d];
@@ -237,7 +242,10 @@ Eigen::Vector3d VirtualOperator::next(const Eigen::Vector3d& rendered_force) noe
     }
   }
   ++tick_;
-  return position_;
+  DeviceState s;
+  s.position_m = position_;
+  s.velocity_m_per_s = velocity_;
+  return s;
 }
 
 }  // namespace fetouch::haptics

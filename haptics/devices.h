@@ -8,7 +8,7 @@
 //     integrated exactly over each tick for inputs held over the tick (zero-order hold: the state
 //     transition exp(A T) and its input matrix, computed once), so the force fed back changes the
 //     motion as a real hand's would.
-// next() is called once per tick from the haptic thread: it never allocates, locks, throws or waits.
+// Both are Devices (haptics/device.h): read() and write() never allocate, lock, throw or wait.
 #pragma once
 
 #include <Eigen/Core>
@@ -17,6 +17,8 @@
 #include <string>
 #include <utility>
 #include <vector>
+
+#include "haptics/device.h"
 
 namespace fetouch::haptics {
 
@@ -69,26 +71,17 @@ struct PathSettings {
 // Throws std::invalid_argument for a zero normal, a negative length or a non-positive duration.
 Trajectory scripted_path(PathShape shape, const PathSettings& settings);
 
-class Device {
- public:
-  virtual ~Device() = default;
-  // The device point for the next tick, given the force the device rendered at the last one (N,
-  // on the handle). Real-time safe.
-  virtual Eigen::Vector3d next(const Eigen::Vector3d& rendered_force) noexcept = 0;
-  // True once the trajectory has been played to its end.
-  virtual bool finished() const noexcept = 0;
-  virtual long ticks() const noexcept = 0;  // the number of ticks it lasts
-};
-
 class ReplayDevice final : public Device {
  public:
   ReplayDevice(const Trajectory& trajectory, double period_s);
-  Eigen::Vector3d next(const Eigen::Vector3d& rendered_force) noexcept override;
+  DeviceState read() noexcept override;
+  Eigen::Vector3d write(const Eigen::Vector3d& force_n) noexcept override { return force_n; }
   bool finished() const noexcept override { return tick_ >= static_cast<long>(points_.size()); }
   long ticks() const noexcept override { return static_cast<long>(points_.size()); }
 
  private:
   std::vector<Eigen::Vector3d> points_;
+  double period_s_;
   long tick_ = 0;
 };
 
@@ -103,7 +96,11 @@ class VirtualOperator final : public Device {
   // Starts at rest on the trajectory's first point. Throws std::invalid_argument for a mass,
   // stiffness or damping that is not positive (damping may be zero).
   VirtualOperator(const Trajectory& trajectory, const HandParameters& hand, double period_s);
-  Eigen::Vector3d next(const Eigen::Vector3d& rendered_force) noexcept override;
+  DeviceState read() noexcept override;
+  Eigen::Vector3d write(const Eigen::Vector3d& force_n) noexcept override {
+    force_ = force_n;
+    return force_n;
+  }
   bool finished() const noexcept override { return tick_ >= static_cast<long>(targets_.size()); }
   long ticks() const noexcept override { return static_cast<long>(targets_.size()); }
   const Eigen::Vector3d& velocity() const { return velocity_; }
@@ -113,7 +110,7 @@ class VirtualOperator final : public Device {
   Eigen::Matrix2d phi_;    // exp(A T), A = [0 1; -k/m -b/m]
   Eigen::Vector2d gamma_;  // int_0^T exp(A s) ds [0; 1/m]
   double stiffness_, damping_;
-  Eigen::Vector3d position_, velocity_;
+  Eigen::Vector3d position_, velocity_, force_ = Eigen::Vector3d::Zero();
   long tick_ = 0;
 };
 

@@ -17,5 +17,7 @@ void add_mesh_command(CLI::App& parent, int& exit_code);
 void add_render_command(CLI::App& parent, int& exit_code);
 void add_replay_command(CLI::App& parent, int& exit_code);
 void add_trajectory_command(CLI::App& parent, int& exit_code);
+void add_run_command(CLI::App& parent, int& exit_code);
+void add_devices_command(CLI::App& parent, int& exit_code);
 
 }  // namespace fetouch::app

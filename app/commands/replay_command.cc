@@ -21,6 +21,7 @@
 #include "app/output_guard.h"
 #include "app/pvd.h"
 #include "app/recording.h"
+#include "app/scene_devices.h"
 #include "app/scene_mesh.h"
 #include "app/session.h"
 #include "fem/fem_environment.h"
@@ -38,24 +39,6 @@ struct ReplayOptions {
   bool compare_ideal = false;
   bool json = false;
 };
-
-haptics::HapticLoopSettings loop_settings(const config::Scene& scene) {
-  const config::Haptics& h = scene.haptics;
-  haptics::HapticLoopSettings s;
-  haptics::parse_local_model(config::to_string(h.local_model), s.local_model);  // the same names
-  s.hold = h.hold == config::HoldType::foh ? haptics::HoldKind::foh : haptics::HoldKind::zoh;
-  s.ratio = h.ratio(scene.solver);
-  s.period_s = 1 / h.rate_hz;
-  s.schedule_gains = h.automatic_gains;
-  s.coupling = h.coupling;
-  s.gains = {h.proportional_n_per_m, h.integral_n_per_m};
-  s.selection.margin = h.robustness_margin;
-  s.safety.max_force_n = h.max_force_n;
-  s.safety.max_force_rate_n_per_s = h.max_force_rate_n_per_s;
-  s.safety.period_s = s.period_s;
-  s.safety.watchdog_timeout_s = h.watchdog_timeout_s;
-  return s;
-}
 
 // Under MPI every rank steps the solver together (ARCHITECTURE.md section 5): rank 0 runs the
 // session (haptic and I/O threads, recording) against this environment, which broadcasts each
@@ -290,20 +273,7 @@ SessionSummary run_session(const config::Scene& scene, const ReplayOptions& o, c
     log::detail() << "probe " << probe.name << ": contact patch at (" << touch << ") m";
     if (patches) patches->emplace_back(touch[0], touch[1], touch[2]);
     model->solver->add_contact_patch(touch, probe.radius_m);
-    switch (probe.device.type) {
-      case config::DeviceType::replay:
-        devices.push_back(std::make_unique<haptics::ReplayDevice>(path, settings.period_s));
-        break;
-      case config::DeviceType::operator_model: {
-        const auto& h = probe.device.hand;
-        devices.push_back(std::make_unique<haptics::VirtualOperator>(
-            path, haptics::HandParameters{h.mass_kg, h.stiffness_n_per_m, h.damping_n_s_per_m}, settings.period_s));
-        break;
-      }
-      default:
-        throw std::runtime_error("probe " + probe.name + ": a " + std::string(config::to_string(probe.device.type)) +
-                                 " device needs hardware; replay uses replay or operator devices");
-    }
+    devices.push_back(make_device(probe, scene, settings, &path));
     session.probes.push_back(probe.name);
   }
   fem::FemEnvironment environment(std::move(model->solver), model->newton);

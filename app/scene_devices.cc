@@ -1,0 +1,69 @@
+#include "app/scene_devices.h"
+
+#include <stdexcept>
+#include <string>
+
+#include "haptics/phantom.h"
+
+namespace fetouch::app {
+
+haptics::HapticLoopSettings loop_settings(const config::Scene& scene) {
+  const config::Haptics& h = scene.haptics;
+  haptics::HapticLoopSettings s;
+  haptics::parse_local_model(config::to_string(h.local_model), s.local_model);  // the same names
+  s.hold = h.hold == config::HoldType::foh ? haptics::HoldKind::foh : haptics::HoldKind::zoh;
+  s.ratio = h.ratio(scene.solver);
+  s.period_s = 1 / h.rate_hz;
+  s.schedule_gains = h.automatic_gains;
+  s.coupling = h.coupling;
+  s.gains = {h.proportional_n_per_m, h.integral_n_per_m};
+  s.selection.margin = h.robustness_margin;
+  s.safety.max_force_n = h.max_force_n;
+  s.safety.max_force_rate_n_per_s = h.max_force_rate_n_per_s;
+  s.safety.period_s = s.period_s;
+  s.safety.watchdog_timeout_s = h.watchdog_timeout_s;
+  return s;
+}
+
+haptics::WorkspaceMapping workspace_mapping(const config::Device& device) {
+  haptics::WorkspaceMapping m;
+  const config::Vec3* axes[3] = {&device.x_axis, &device.y_axis, &device.z_axis};
+  for (int c = 0; c < 3; ++c)
+    for (int r = 0; r < 3; ++r) m.rotation(r, c) = (*axes[c])[r];
+  m.scale = device.scale;
+  m.offset_m = Eigen::Vector3d(device.offset_m[0], device.offset_m[1], device.offset_m[2]);
+  m.engage_button = device.engage_button;
+  m.clutch_button = device.clutch_button;
+  return m;
+}
+
+std::unique_ptr<haptics::Device> make_device(const config::Probe& probe, const config::Scene& scene,
+                                             const haptics::HapticLoopSettings& settings, const haptics::Trajectory* path) {
+  const config::Device& d = probe.device;
+  switch (d.type) {
+    case config::DeviceType::replay:
+    case config::DeviceType::operator_model:
+      if (!path) throw std::runtime_error("probe " + probe.name + ": a " + config::to_string(d.type) + " device needs a trajectory");
+      if (d.type == config::DeviceType::replay) return std::make_unique<haptics::ReplayDevice>(*path, settings.period_s);
+      return std::make_unique<haptics::VirtualOperator>(
+          *path, haptics::HandParameters{d.hand.mass_kg, d.hand.stiffness_n_per_m, d.hand.damping_n_s_per_m}, settings.period_s);
+    case config::DeviceType::phantom: {
+      haptics::PhantomSettings p;
+      p.name = d.phantom_name;
+      p.library = d.library;
+      p.max_force_n = scene.haptics.max_force_n;
+      p.period_s = settings.period_s;
+      p.mapping = workspace_mapping(d);
+      try {
+        return std::make_unique<haptics::PhantomDevice>(p);
+      } catch (const std::exception& e) {
+        throw std::runtime_error("probe " + probe.name + ": " + e.what());
+      }
+    }
+    default:
+      throw std::runtime_error("probe " + probe.name + ": the " + std::string(config::to_string(d.type)) +
+                               " device needs the trainer window (fetouch trainer), which is not built yet");
+  }
+}
+
+}  // namespace fetouch::app
