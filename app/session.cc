@@ -322,7 +322,7 @@ SessionSummary run_realtime(haptics::Environment& environment, std::vector<std::
     }
     if (monitor) {
       monitor->ticks.store(k + 1, std::memory_order_relaxed);
-      if (lateness[k] > period) monitor->late_ticks.fetch_add(1, std::memory_order_relaxed);
+      monitor->late_ticks.store(tick_overruns.load(std::memory_order_relaxed), std::memory_order_relaxed);
     }
     if (!ring.push(block.data(), block.size())) dropped.fetch_add(1, std::memory_order_relaxed);
     if (loop.decimated()) {

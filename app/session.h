@@ -37,7 +37,7 @@ namespace fetouch::app {
 // lock, no allocation) and read by anyone.
 struct SessionMonitor {
   static constexpr int kMaxDevices = 16;
-  std::atomic<long> ticks{0}, late_ticks{0};
+  std::atomic<long> ticks{0}, late_ticks{0};  // late ticks as TimingSummary::tick_overruns counts them
   std::atomic<double> force_n[kMaxDevices] = {};  // the force each device was last sent (magnitude)
 };
 
@@ -67,7 +67,8 @@ struct SessionSettings {
 struct TimingSummary {
   double period_p50_s = 0, period_p99_s = 0, period_max_s = 0;       // between tick starts
   double lateness_p50_s = 0, lateness_p99_s = 0, lateness_max_s = 0; // tick start after its deadline
-  long tick_overruns = 0;     // ticks that ended after the next tick's deadline
+  long tick_overruns = 0;     // ticks that ended after the next tick's deadline (on a driver's
+                              // clock: ticks that started over 1.5 periods after the last one)
   long frame_overruns = 0;    // frame starts at which the previous frame's answer was not there yet
   long first_late_tick = -1;  // the tick of the first (-1: none): up to it, forces equal lockstep's
   long skipped_frames = 0;    // frames whose samples a newer frame replaced before the solver took them

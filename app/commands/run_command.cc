@@ -149,17 +149,29 @@ int run_run(const RunOptions& o) {
     // The status line, from the solver thread after a frame, at most twice a second (over itself on
     // a terminal, a line every 5 s otherwise).
     const bool terminal = isatty(STDERR_FILENO) != 0;
-    auto last_status = std::chrono::steady_clock::now();
+    auto last_status = std::chrono::steady_clock::now(), started = last_status;
+    long last_ticks = 0, last_frame = 0;
     const int m = static_cast<int>(scene.probes.size());
     session.after_frame = [&](const FrameRecord& f) {
       const auto now = std::chrono::steady_clock::now();
       if (log::level() < log::Level::info || now - last_status < std::chrono::milliseconds(terminal ? 500 : 5000)) return;
       last_status = now;
+      // The rates achieved since the last line: ticks and frames per second of wall time.
+      const double wall = std::chrono::duration<double>(now - started).count();
+      const long ticks_now = monitor.ticks.load();
+      const double haptic_hz = wall > 0 ? double(ticks_now - last_ticks) / wall : 0;
+      const double solver_hz = wall > 0 ? double(f.frame - last_frame) / wall : 0;
+      started = now, last_ticks = ticks_now, last_frame = f.frame;
       std::ostringstream line;
       line.precision(3);
       line << std::fixed << "t " << f.time_s << " s  forces";
       for (int d = 0; d < m && d < SessionMonitor::kMaxDevices; ++d) line << " " << monitor.force_n[d].load() << " N";
-      line << "  solve " << 1e3 * f.solve_s << " ms  margin " << f.stability_margin << "  late ticks " << monitor.late_ticks.load();
+      line.precision(0);
+      line << "  haptic " << haptic_hz << " Hz  solver " << solver_hz << " Hz";
+      line.precision(1);
+      line << "  solve " << 1e3 * f.solve_s << " ms";
+      line.precision(3);
+      line << "  margin " << f.stability_margin << "  late ticks " << monitor.late_ticks.load();
       std::fprintf(stderr, terminal ? "\r%s   " : "%s\n", line.str().c_str());
     };
     // Installed last: MPI and PETSc install their own handlers when they start.
