@@ -64,6 +64,10 @@ std::string error_text(const hd::Api& api, const hd::HDErrorInfo& e) {
   return text;
 }
 
+}  // namespace
+
+namespace detail {
+
 // The scheduler of one HD library: the vendor's servo thread, shared by every device it drives.
 class HdScheduler final : public ServoClock {
  public:
@@ -118,10 +122,18 @@ class HdScheduler final : public ServoClock {
   double period_s_ = 1e-3;
 };
 
-struct Loaded {
+// A loaded HD library: its entry points and its scheduler.
+struct LoadedHd {
   hd::Api api{};
   std::unique_ptr<HdScheduler> scheduler;
 };
+
+}  // namespace detail
+
+namespace {
+
+using detail::HdScheduler;
+using Loaded = detail::LoadedHd;
 
 std::map<std::string, Loaded>& libraries() {
   static std::map<std::string, Loaded> loaded;
@@ -228,7 +240,7 @@ PhantomInfo describe_phantom(const std::string& library, const std::string& name
 }
 
 PhantomDevice::PhantomDevice(const PhantomSettings& settings)
-    : api_(load_hd_library(hd_library_path(settings.library))), workspace_(settings.mapping, settings.period_s),
+    : library_(loaded(hd_library_path(settings.library))), api_(library_.api), workspace_(settings.mapping, settings.period_s),
       clamp_n_(settings.max_force_n), off_length_(std::max<long>(1, std::lround(0.1 / settings.period_s))) {
   info_ = open_device(api_, settings.name, handle_);
   const auto refuse = [&](const std::string& why) {
@@ -248,8 +260,7 @@ PhantomDevice::PhantomDevice(const PhantomSettings& settings)
     api_.hdEnable(capability);
   const hd::HDErrorInfo e = api_.hdGetError();
   if (e.errorCode != hd::kSuccess) refuse("refused force output: " + error_text(api_, e));
-  auto* scheduler = loaded(hd_library_path(settings.library)).scheduler.get();
-  scheduler->set_period(settings.period_s);
+  library_.scheduler->set_period(settings.period_s);
 }
 
 PhantomDevice::~PhantomDevice() {
@@ -259,8 +270,7 @@ PhantomDevice::~PhantomDevice() {
 }
 
 Eigen::Vector3d PhantomDevice::position_now() {
-  for (auto& [path, l] : libraries())
-    if (&l.api == &api_) l.scheduler->ensure_running();
+  library_.scheduler->ensure_running();
   struct Query {
     PhantomDevice* self;
     double position[3];
@@ -285,11 +295,7 @@ Eigen::Vector3d PhantomDevice::position_now() {
   return mapping.to_scene(device).position_m;
 }
 
-ServoClock* PhantomDevice::servo_clock() noexcept {
-  for (auto& [path, l] : libraries())
-    if (&l.api == &api_) return l.scheduler.get();
-  return nullptr;
-}
+ServoClock* PhantomDevice::servo_clock() noexcept { return library_.scheduler.get(); }
 
 DeviceState PhantomDevice::read() noexcept {
   api_.hdMakeCurrentDevice(handle_);

@@ -32,6 +32,10 @@ std::string hd_library_path(const std::string& configured);
 // one line: the library or the entry point that is missing, the dlerror text, and what to install.
 const hd::Api& load_hd_library(const std::string& path);
 
+namespace detail {
+struct LoadedHd;  // a loaded library and its scheduler (phantom.cc)
+}
+
 struct PhantomInfo {
   std::string name;  // as asked for ("" is the default device)
   std::string model, serial;
@@ -76,7 +80,8 @@ class PhantomDevice final : public Device {
   const Workspace& workspace() const { return workspace_; }
 
  private:
-  const hd::Api& api_;
+  detail::LoadedHd& library_;
+  const hd::Api& api_;  // library_'s entry points
   hd::HHD handle_ = hd::kInvalidHandle;
   PhantomInfo info_;
   Workspace workspace_;

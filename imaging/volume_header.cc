@@ -169,17 +169,18 @@ std::map<std::string, std::string> text_header(const std::filesystem::path& path
     // into a 255-byte field name (a fortified abort; found by fuzz_sweep).
     if (separator == '=' && !trim(line).empty()) {
       const auto colon = line.find(':');
-      if (at == std::string::npos || (colon != std::string::npos && colon < at) || trim(line.substr(0, at)).empty())
+      const std::string key = at == std::string::npos ? std::string() : trim(line.substr(0, at));
+      if (at == std::string::npos || (colon != std::string::npos && colon < at) || key.empty())
         throw std::runtime_error(path.string() + ":" + std::to_string(number) + ": '" + shown(line) +
                                  "' is not a MetaImage field; expected 'Key = Value'");
-      if (trim(line.substr(0, at)).size() > kMaxMetaImageKey)
+      if (key.size() > kMaxMetaImageKey)
         throw std::runtime_error(path.string() + ":" + std::to_string(number) + ": a key of " +
-                                 std::to_string(trim(line.substr(0, at)).size()) + " characters ('" + shown(line) +
+                                 std::to_string(key.size()) + " characters ('" + shown(line) +
                                  "'); MetaImage keys have at most " + std::to_string(kMaxMetaImageKey));
       // MetaIO copies its own string fields (ObjectType, Comment, Name, ...) into 255-byte buffers;
       // only PLUS's per-frame fields (Seq_Frame...), which it keeps as its own strings, may be longer.
       const std::string value = trim(line.substr(at + 1));
-      if (value.size() > kMaxMetaImageValue && trim(line.substr(0, at)).rfind("Seq_Frame", 0) != 0)
+      if (value.size() > kMaxMetaImageValue && key.rfind("Seq_Frame", 0) != 0)
         throw std::runtime_error(path.string() + ":" + std::to_string(number) + ": a value of " +
                                  std::to_string(value.size()) + " characters ('" + shown(line) +
                                  "'); MetaImage values have at most " + std::to_string(kMaxMetaImageValue));
