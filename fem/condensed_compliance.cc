@@ -51,7 +51,8 @@ FullMatrix<double> CondensedCompliance::compute(LinearSystem& system, const std:
       }
       Vector<double> residual = h[k];
       residual -= kz[k];
-      worst = std::max(worst, residual.l2_norm() / h[k].l2_norm());
+      const double relative = residual.l2_norm() / h[k].l2_norm();
+      worst = std::isnan(relative) ? relative : std::max(worst, relative);  // a singular B'K B: NaN, kept
       std::copy(residual.begin(), residual.end(), residuals.begin() + std::size_t(k) * n);
     }
     if (worst <= galerkin_tolerance) break;

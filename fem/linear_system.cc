@@ -1,5 +1,7 @@
 #include "fem/linear_system.h"
 
+#include <numeric>
+
 #include <deal.II/base/function.h>
 #include <deal.II/dofs/dof_tools.h>
 #include <deal.II/fe/component_mask.h>
@@ -123,6 +125,24 @@ void LinearSystem::apply_factorisation(const double* b, double* x, int columns) 
   TangentSystem::SolveStats stats = tangent_.apply_factorisation(b, x, columns);
   stats.iterations = 1;  // one blocked application
   account(stats);
+  if (rank_one_c_ == 0) return;
+  // The dense part too, by Sherman-Morrison with the same factorisation (P + c g g')^-1 b =
+  // P^-1 b - c (g.P^-1 b) / (1 + c g.P^-1 g) P^-1 g. Without it a correction carries a component
+  // along g that the rank-one term (a liquid's c ~ 10^12) weighs so heavily that a Galerkin
+  // projection on such corrections loses every digit.
+  const Vector<double>& g = *rank_one_g_;
+  const std::size_t n = g.size();
+  Vector<double> pg(n);
+  TangentSystem::SolveStats g_stats = tangent_.apply_factorisation(g.begin(), pg.begin(), 1);
+  g_stats.iterations = 1;
+  account(g_stats);
+  const double denominator = 1 + rank_one_c_ * (g * pg);
+  for (int k = 0; k < columns; ++k) {
+    double* column = x + std::size_t(k) * n;
+    const double gx = std::inner_product(g.begin(), g.end(), column, 0.0);
+    const double scale = -rank_one_c_ * gx / denominator;
+    for (std::size_t i = 0; i < n; ++i) column[i] += scale * pg[i];
+  }
 }
 
 }  // namespace fetouch::fem

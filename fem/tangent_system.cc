@@ -294,7 +294,9 @@ TangentSystem::SolveStats TangentSystem::solve(const double* b, double* x, doubl
     stats.solve_s += since(start);
     if (reason > 0) {
       if (baseline_iterations_ < 0) baseline_iterations_ = static_cast<int>(iterations);
-      if (iterations > std::max(refactor_after_iterations, 3 * baseline_iterations_ / 2)) {
+      // Multigrid drifts from its own first count; a factorisation from one iteration (solve_cholmod).
+      const int allowed = amg ? std::max(refactor_after_iterations, 3 * baseline_iterations_ / 2) : refactor_after_iterations;
+      if (iterations > allowed) {
         if (in_frame_ && !amg) request_background();  // the same schedule as on one rank
         else refactor_ = true;
       }

@@ -190,8 +190,11 @@ TangentSystem::SolveStats TangentSystem::solve_cholmod(const double* b, double* 
   stats.iterations = iterations;
   stats.solve_s += since(start);
   if (converged) {
-    if (baseline_iterations_ < 0) baseline_iterations_ = iterations;
-    if (iterations > std::max(refactor_after_iterations, 3 * baseline_iterations_ / 2)) {
+    // Against the factorisation's own matrix CG takes one iteration: more than
+    // refactor_after_iterations means K has drifted from it. (No baseline as for multigrid: a
+    // factorisation taken up from the background is already a few frames old, and measuring drift
+    // from its first count would let it age without bound.)
+    if (iterations > refactor_after_iterations) {
       if (in_frame_) request_background();
       else refactor_ = true;
     }
