@@ -32,6 +32,8 @@ std::string cache_key(const config::MeshSpec& spec) {
   std::error_code ec;
   if (spec.source == config::MeshSource::phantom) {
     key << "phantom|" << spec.phantom.seed << '|' << spec.phantom.spacing_m;
+    const auto& o = spec.phantom.fetus_offset_m;
+    if (o[0] != 0 || o[1] != 0 || o[2] != 0) key << "|fetus+" << o[0] << ',' << o[1] << ',' << o[2];
   } else if (fs::is_regular_file(spec.path, ec)) {
     key << fs::absolute(spec.path).string() << '|';
     key << fs::file_size(spec.path, ec) << '|' << fs::last_write_time(spec.path, ec).time_since_epoch().count();
@@ -63,6 +65,7 @@ void mesh_into(const config::MeshSpec& spec, const fs::path& file) {
     p.seed = static_cast<std::uint32_t>(spec.phantom.seed);
     p.spacing_mm = spec.phantom.spacing_m * 1e3;
     p.speckle = false;  // only the labels are meshed
+    for (int d = 0; d < 3; ++d) p.fetus_offset_mm[d] = spec.phantom.fetus_offset_m[d] * 1e3;
     const imaging::Phantom phantom = imaging::make_phantom(p);
     const auto& l = phantom.labels;
     volume.dimensions = l.dimensions, volume.spacing_mm = l.spacing_mm, volume.origin_mm = l.origin_mm;

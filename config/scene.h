@@ -61,6 +61,7 @@ struct GeneratedMesh {
 struct PhantomSource {
   int seed = 1;
   double spacing_m = 1e-3;
+  Vec3 fetus_offset_m{0, 0, 0};  // the fetus moved from where the seed puts it
 };
 
 struct MeshSpec {
@@ -118,7 +119,8 @@ struct Effects {
   double rayleigh_mass_per_s = 0;     // damping C = a M + b K: a
   double rayleigh_stiffness_s = 0;    // b
 
-  std::string cavity_surface;  // physical group of the closed inner surface
+  std::string cavity_surface;  // physical group of the closed inner surface, or
+  std::vector<std::string> cavity_regions;  // the volume regions (names or material ids) it holds
   PressureVolumeLaw cavity_law = PressureVolumeLaw::linear;
   double cavity_initial_pressure_pa = 0;
   double cavity_bulk_modulus_pa = 2.2e9;  // linear law: dp = -K dV / V0 (water)

@@ -56,18 +56,7 @@ const Choices<GeneratedShape> kShapes{{"box", GeneratedShape::box},
 const Choices<SmoothingFilter> kFilters{{"none", SmoothingFilter::none},
                                         {"gaussian", SmoothingFilter::gaussian},
                                         {"median", SmoothingFilter::median}};
-const Choices<Effect> kEffects{{"elasticity", Effect::elasticity},
-                               {"gravity", Effect::gravity},
-                               {"inertia", Effect::inertia},
-                               {"damping", Effect::damping},
-                               {"incompressibility", Effect::incompressibility},
-                               {"cavity", Effect::cavity},
-                               {"contact", Effect::contact}};
-const Choices<TimeIntegrator> kIntegrators{{"backward_euler", TimeIntegrator::backward_euler},
-                                           {"newmark", TimeIntegrator::newmark},
-                                           {"hht", TimeIntegrator::hht}};
-const Choices<PressureVolumeLaw> kLaws{{"linear", PressureVolumeLaw::linear},
-                                       {"isothermal_gas", PressureVolumeLaw::isothermal_gas}};
+
 
 
 // ---- mesh ---------------------------------------------------------------------------------------
@@ -211,10 +200,12 @@ void read_mesh(MapView& scene, MeshSpec& out) {
   } else if (map.has("phantom")) {
     out.source = MeshSource::phantom;
     const Entry p = map.entry("phantom");
-    MapView phantom(map.reader(), p.value, p.path, p.key_mark, {"seed", "spacing_m"});
+    MapView phantom(map.reader(), p.value, p.path, p.key_mark, {"seed", "spacing_m", "fetus_offset_m"});
     if (phantom.valid()) {
       phantom.integer("seed", out.phantom.seed, {0, 2147483647});
       phantom.number("spacing_m", out.phantom.spacing_m, {2.5e-4, 5e-3, false, false});
+      phantom.vec3("fetus_offset_m", out.phantom.fetus_offset_m, Need::optional,
+                   {-0.05, 0.05, false, false, "-0.05 to 0.05 m: the sac is about 0.1 m across"});
     }
   } else {
     out.source = MeshSource::generated;
@@ -232,115 +223,6 @@ void read_mesh(MapView& scene, MeshSpec& out) {
   // The phantom's label map: the whole uterus (wall, fluid, fetus) unless the options choose.
   if (out.source == MeshSource::phantom && out.meshing.labels.empty() && !out.meshing.fetus && !out.meshing.threshold)
     out.meshing.labels = {1, 2, 3, 4, 5, 6};
-}
-
-// ---- effects ------------------------------------------------------------------------------------
-
-void read_effect_parameters(Reader& reader, Effect effect, const Entry& e, Effects& out) {
-  switch (effect) {
-    case Effect::gravity: {
-      MapView map(reader, e.value, e.path, e.key_mark, {"acceleration_m_per_s2"});
-      if (map.valid()) map.vec3("acceleration_m_per_s2", out.gravity_m_per_s2);
-      break;
-    }
-    case Effect::inertia: {
-      MapView map(reader, e.value, e.path, e.key_mark, {"integrator", "hht_alpha"});
-      if (!map.valid()) break;
-      map.choice("integrator", out.integrator, kIntegrators);
-      if (map.has("hht_alpha") && out.integrator != TimeIntegrator::hht)
-        reject_keys(map, {"hht_alpha"}, "unless integrator is hht");
-      else
-        map.number("hht_alpha", out.hht_alpha, {-1.0 / 3.0, 0, false, false});
-      break;
-    }
-    case Effect::damping: {
-      MapView map(reader, e.value, e.path, e.key_mark,
-                  {"mass_coefficient_per_s", "stiffness_coefficient_s"});
-      if (!map.valid()) break;
-      map.number("mass_coefficient_per_s", out.rayleigh_mass_per_s, {0, 1e4, false, false, "up to 10^4 per second"});
-      map.number("stiffness_coefficient_s", out.rayleigh_stiffness_s, {0, 1, false, false, "up to 1 s"});
-      break;
-    }
-    case Effect::cavity: {
-      MapView map(reader, e.value, e.path, e.key_mark,
-                  {"surface", "law", "initial_pressure_pa", "bulk_modulus_pa"});
-      if (!map.valid()) break;
-      if (map.text("surface", out.cavity_surface, Need::required) && out.cavity_surface.empty())
-        reader.error(map.entry("surface").value_mark, map.child_path("surface"),
-                     "expected the name of the mesh's physical group that bounds the cavity");
-      map.choice("law", out.cavity_law, kLaws);
-      map.number("initial_pressure_pa", out.cavity_initial_pressure_pa, plausible::pressure_pa);
-      map.number("bulk_modulus_pa", out.cavity_bulk_modulus_pa, plausible::bulk_modulus_pa);
-      break;
-    }
-    default:
-      reader.error(e.value_mark, e.path,
-                   std::string("effect '") + name_of(kEffects, effect) + "' takes no parameters");
-  }
-}
-
-void read_effects(MapView& scene, Effects& out) {
-  const Entry e = scene.entry("effects");
-  Reader& reader = scene.reader();
-  if (e.value.IsNull()) return;  // "effects:" with nothing: elasticity only
-  if (!e.value.IsSequence()) {
-    reader.error(e.value_mark, e.path,
-                 "expected a list of effects (- gravity, - contact, ...), got " +
-                     detail::describe_node(e.value));
-    return;
-  }
-  std::vector<std::string> names;
-  for (const auto& c : kEffects) names.push_back(c.first);
-  std::set<Effect> seen;
-  for (size_t i = 0; i < e.value.size(); ++i) {
-    const YAML::Node item = e.value[i];
-    const std::string item_path = e.path + "[" + std::to_string(i) + "]";
-    Entry name_entry;  // the effect's name, written alone or as the single key of a mapping
-    Entry parameters;
-    name_entry.path = item_path;
-    name_entry.value_mark = name_entry.key_mark = item.Mark();
-    if (item.IsScalar()) {
-      name_entry.value.reset(item);
-    } else if (item.IsMap() && item.size() == 1) {
-      name_entry.value.reset(item.begin()->first);
-      name_entry.value_mark = item.begin()->first.Mark();
-      parameters.present = true;
-      parameters.key_mark = name_entry.value_mark;
-      parameters.value.reset(item.begin()->second);
-      parameters.value_mark = item.begin()->second.IsNull() ? name_entry.value_mark
-                                                            : item.begin()->second.Mark();
-    } else {
-      reader.error(item.Mark(), item_path,
-                   "expected an effect name, or one name with its parameters (- gravity: "
-                   "{acceleration_m_per_s2: [0, 0, -9.81]}), got " + detail::describe_node(item));
-      continue;
-    }
-    auto word = detail::read_text(reader, name_entry);
-    if (!word) continue;
-    auto found = std::find(names.begin(), names.end(), *word);
-    if (found == names.end()) {
-      std::string message = "unknown effect '" + *word + "'; effects are elasticity, gravity, "
-                            "inertia, damping, incompressibility, cavity and contact";
-      const std::string suggestion = closest_match(*word, names);
-      if (!suggestion.empty()) message += "; did you mean '" + suggestion + "'?";
-      reader.error(name_entry.value_mark, item_path, message);
-      continue;
-    }
-    const Effect effect = kEffects[found - names.begin()].second;
-    const std::string effect_path = e.path + "." + *word;
-    if (!seen.insert(effect).second) {
-      reader.error(name_entry.value_mark, effect_path, "effect '" + *word + "' is listed twice");
-      continue;
-    }
-    out.listed.push_back(effect);
-    if (parameters.present && !parameters.value.IsNull()) {
-      parameters.path = effect_path;
-      read_effect_parameters(reader, effect, parameters, out);
-    } else if (effect == Effect::cavity) {
-      reader.error(name_entry.value_mark, effect_path,
-                   "a cavity needs its surface: - cavity: {surface: <physical group>}");
-    }
-  }
 }
 
 }  // namespace
@@ -487,7 +369,7 @@ const char* to_string(MeshSource v) {
 const char* to_string(ElementType v) { return name_of(kElements, v); }
 const char* to_string(GeneratedShape v) { return name_of(kShapes, v); }
 const char* to_string(SmoothingFilter v) { return name_of(kFilters, v); }
-const char* to_string(Effect v) { return name_of(kEffects, v); }
+const char* to_string(Effect v) { return name_of(kEffects, v); }  // the tables: effects_reader.cc
 const char* to_string(TimeIntegrator v) { return name_of(kIntegrators, v); }
 const char* to_string(PressureVolumeLaw v) { return name_of(kLaws, v); }
 

@@ -1,5 +1,6 @@
 // The readers of a scene's sections that live in files of their own (boundary_reader.cc,
-// session_reader.cc), and the helpers they share with scene_loader.cc. Internal to config/.
+// effects_reader.cc, material_reader.cc, session_reader.cc), and the helpers they share with
+// scene_loader.cc. Internal to config/.
 #pragma once
 
 #include <string>
@@ -21,6 +22,12 @@ const char* name_of(const Choices<E>& choices, E value) {
 std::string format_number(double value);
 // Reports each key of `keys` present in `map` as not used in the situation `why` describes.
 void reject_keys(MapView& map, const std::vector<std::string>& keys, const std::string& why);
+
+// The choices of the effects section (effects_reader.cc).
+extern const Choices<Effect> kEffects;
+extern const Choices<TimeIntegrator> kIntegrators;
+extern const Choices<PressureVolumeLaw> kLaws;
+void read_effects(MapView& scene, Effects& out);  // effects_reader.cc
 
 // `material` and `materials` (material_reader.cc): at least one of them.
 void read_materials(MapView& scene, Scene& out);

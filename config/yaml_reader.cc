@@ -143,6 +143,29 @@ std::optional<double> read_number(Reader& reader, const Entry& entry) {
   }
 }
 
+std::vector<std::string> read_name_list(Reader& reader, const Entry& list, const std::string& what) {
+  std::vector<std::string> names;
+  if (!list.value.IsSequence() || list.value.size() == 0) {
+    reader.error(list.value_mark, list.path, "expected a list of " + what + ", found " + describe_node(list.value));
+    return names;
+  }
+  for (std::size_t i = 0; i < list.value.size(); ++i) {
+    Entry item = list;
+    item.value.reset(list.value[i]);
+    item.value_mark = list.value[i].Mark();
+    item.path = list.path + "[" + std::to_string(i) + "]";
+    const std::optional<std::string> name = read_text(reader, item);
+    if (!name) continue;
+    if (name->empty())
+      reader.error(item.value_mark, item.path, "expected a name or number, found an empty text");
+    else if (std::count(names.begin(), names.end(), *name))
+      reader.error(item.value_mark, item.path, "'" + *name + "' is listed twice");
+    else
+      names.push_back(*name);
+  }
+  return names;
+}
+
 std::optional<std::string> read_text(Reader& reader, const Entry& entry) {
   if (!entry.value.IsScalar()) {
     reader.error(entry.value_mark, entry.path, "expected text, got " + describe_node(entry.value));
@@ -281,7 +304,7 @@ bool MapView::text(const std::string& key, std::string& out, Need need) {
   return true;
 }
 
-bool MapView::vec3(const std::string& key, Vec3& out, Need need) {
+bool MapView::vec3(const std::string& key, Vec3& out, Need need, const Range& range) {
   if (!present_or_report(key, need)) return false;
   const Entry e = entry(key);
   if (!e.value.IsSequence() || e.value.size() != 3) {
@@ -298,6 +321,11 @@ bool MapView::vec3(const std::string& key, Vec3& out, Need need) {
     component.path = e.path + "[" + std::to_string(i) + "]";
     auto value = read_number(reader_, component);
     if (!value) return false;
+    if (!range.contains(*value)) {
+      reader_.error(component.value_mark, component.path,
+                    format_number(*value) + " is out of range; expected a number " + range.describe());
+      return false;
+    }
     v[i] = *value;
   }
   out = v;

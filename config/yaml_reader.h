@@ -100,7 +100,8 @@ class MapView {
   bool integer(const std::string& key, int& out, const Range& range, Need need = Need::optional);
   bool boolean(const std::string& key, bool& out, Need need = Need::optional);
   bool text(const std::string& key, std::string& out, Need need = Need::optional);
-  bool vec3(const std::string& key, Vec3& out, Need need = Need::optional);
+  // Each component within `range` (reported at the component).
+  bool vec3(const std::string& key, Vec3& out, Need need = Need::optional, const Range& range = Range::any());
   // A file or folder that must exist; stored absolute, resolved against the scene's folder.
   bool existing_path(const std::string& key, std::filesystem::path& out, Need need,
                      const std::vector<std::string>& extensions, bool allow_directory = false);
@@ -122,6 +123,10 @@ class MapView {
   bool valid_ = false;
   std::map<std::string, Entry> entries_;
 };
+
+// A non-empty list of distinct, non-empty names (`what` names one in messages: "volume regions
+// such as [fluid, fetus]"); each problem reported at its entry. The names read, bad ones left out.
+std::vector<std::string> read_name_list(Reader& reader, const Entry& list, const std::string& what);
 
 // The offset of the first NUL byte or malformed UTF-8 sequence in `text`, if any.
 std::optional<std::size_t> first_non_text_byte(const std::string& text);

@@ -10,51 +10,86 @@ namespace fetouch::fem {
 
 using namespace dealii;
 
-CavityTerm::CavityTerm(const Discretisation& d, unsigned int boundary_id, const CavityLaw& law) : law_(law) {
+namespace {
+
+void check_supported(const Discretisation& d, const CavityLaw& law) {
   if (d.fe->degree != 1)
     throw std::invalid_argument("cavity: the wall is taken as flat faces between vertices; use P1 or Q1 elements");
   if (law.gas ? !(law.initial_pressure_pa > 0) : !(law.bulk_modulus_pa > 0))
     throw std::invalid_argument("cavity: a gas needs a positive initial pressure, a liquid a positive bulk modulus");
+}
+
+// Face f of `cell` as one triangle (a quadrilateral as two) of the wall, its normal pointing into
+// the cell (`into_cell`) or out of it: always out of the cavity.
+template <class Cell>
+void add_face(const Discretisation& d, const Cell& cell, unsigned int f, bool into_cell, CavityWall& wall) {
   std::vector<types::global_dof_index> indices(d.fe->n_dofs_per_cell());
-  for (const auto& cell : d.dof.active_cell_iterators())
-    for (const unsigned int f : cell->face_indices()) {
-      const auto face = cell->face(f);
-      if (!face->at_boundary() || face->boundary_id() != boundary_id) continue;
-      cell->get_dof_indices(indices);
-      const auto triangle = [&](unsigned int a, unsigned int b, unsigned int c) {
-        CavityWall::Triangle t;
-        const unsigned int vs[3] = {a, b, c};
-        for (int v = 0; v < 3; ++v) {
-          // The face vertex's index in the cell, then its dof of each component.
-          unsigned int in_cell = 0;
-          while (cell->vertex_index(in_cell) != face->vertex_index(vs[v])) ++in_cell;
-          for (unsigned int k = 0; k < 3; ++k) {
-            t.dofs[v][k] = static_cast<unsigned int>(indices[d.fe->component_to_system_index(k, in_cell)]);
-            t.position[v][k] = face->vertex(vs[v])[k];
-          }
-        }
-        // Normals out of the cavity, i.e. into this cell.
-        const Point<3> pa = face->vertex(a), pb = face->vertex(b), pc = face->vertex(c);
-        const Tensor<1, 3> normal = cross_product_3d(pb - pa, pc - pa);
-        if (normal * (cell->center() - face->center()) < 0) std::swap(t.dofs[1], t.dofs[2]), std::swap(t.position[1], t.position[2]);
-        wall_.triangles.push_back(t);
-      };
-      if (face->n_vertices() == 3) {
-        triangle(0, 1, 2);
-      } else {  // deal.II's quadrilateral vertices 0, 1, 3, 2 go around the face
-        triangle(0, 1, 3);
-        triangle(0, 3, 2);
+  const auto face = cell->face(f);
+  cell->get_dof_indices(indices);
+  const auto triangle = [&](unsigned int a, unsigned int b, unsigned int c) {
+    CavityWall::Triangle t;
+    const unsigned int vs[3] = {a, b, c};
+    for (int v = 0; v < 3; ++v) {
+      // The face vertex's index in the cell, then its dof of each component.
+      unsigned int in_cell = 0;
+      while (cell->vertex_index(in_cell) != face->vertex_index(vs[v])) ++in_cell;
+      for (unsigned int k = 0; k < 3; ++k) {
+        t.dofs[v][k] = static_cast<unsigned int>(indices[d.fe->component_to_system_index(k, in_cell)]);
+        t.position[v][k] = face->vertex(vs[v])[k];
       }
     }
+    const Point<3> pa = face->vertex(a), pb = face->vertex(b), pc = face->vertex(c);
+    const Tensor<1, 3> normal = cross_product_3d(pb - pa, pc - pa);
+    const bool points_in = normal * (cell->center() - face->center()) > 0;
+    if (points_in != into_cell) std::swap(t.dofs[1], t.dofs[2]), std::swap(t.position[1], t.position[2]);
+    wall.triangles.push_back(t);
+  };
+  if (face->n_vertices() == 3) {
+    triangle(0, 1, 2);
+  } else {  // deal.II's quadrilateral vertices 0, 1, 3, 2 go around the face
+    triangle(0, 1, 3);
+    triangle(0, 3, 2);
+  }
+}
+
+}  // namespace
+
+CavityTerm::CavityTerm(const Discretisation& d, unsigned int boundary_id, const CavityLaw& law) : law_(law) {
+  check_supported(d, law);
+  for (const auto& cell : d.dof.active_cell_iterators())
+    for (const unsigned int f : cell->face_indices())
+      if (cell->face(f)->at_boundary() && cell->face(f)->boundary_id() == boundary_id) add_face(d, cell, f, true, wall_);
   if (wall_.triangles.empty())
     throw std::invalid_argument("cavity: no boundary face has the cavity's boundary id " + std::to_string(boundary_id));
+  finish_setup(d, "the surface with boundary id " + std::to_string(boundary_id));
+}
+
+CavityTerm::CavityTerm(const Discretisation& d, const std::set<unsigned int>& contents, const CavityLaw& law)
+    : law_(law) {
+  check_supported(d, law);
+  const auto inside = [&](const auto& cell) { return contents.count(cell->material_id()) > 0; };
+  bool any = false, all = true;
+  for (const auto& cell : d.dof.active_cell_iterators()) {
+    if (!inside(cell)) {
+      all = false;
+      continue;
+    }
+    any = true;
+    for (const unsigned int f : cell->face_indices())
+      if (cell->face(f)->at_boundary() || !inside(cell->neighbor(f))) add_face(d, cell, f, false, wall_);
+  }
+  if (!any) throw std::invalid_argument("cavity: no cell belongs to the cavity's regions");
+  if (all) throw std::invalid_argument("cavity: the cavity's regions are the whole body: no wall holds them");
+  finish_setup(d, "the cavity's regions");
+}
+
+void CavityTerm::finish_setup(const Discretisation& d, const std::string& what) {
   const Vector<double> zero(d.n_dofs());
   reference_volume_ = wall_.volume(zero.begin());
   if (!(reference_volume_ > 0))
-    throw std::invalid_argument("cavity: the surface with boundary id " + std::to_string(boundary_id) +
-                                " does not enclose a volume (not closed, or not an inner surface)");
+    throw std::invalid_argument("cavity: " + what + " does not enclose a volume (not closed, or not an inner surface)");
   g_.reinit(d.n_dofs());
-  pressure_ = step_start_ = law.initial_pressure_pa;
+  pressure_ = step_start_ = law_.initial_pressure_pa;
 }
 
 // p g into r (and -p g into `internal`), -p d2V into the tangent, and the law's residual; false if

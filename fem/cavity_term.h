@@ -7,6 +7,8 @@
 #pragma once
 
 #include <cmath>
+#include <set>
+#include <string>
 
 #include "fem/cavity.h"
 #include "fem/discretisation.h"
@@ -18,6 +20,11 @@ class CavityTerm final : public Term {
  public:
   // Throws std::invalid_argument for a surface that encloses no volume, or P2/Q2 elements.
   CavityTerm(const Discretisation& discretisation, unsigned int boundary_id, const CavityLaw& law);
+  // The cavity as the cells of the material ids `contents` (a fluid region, and what floats in it):
+  // its wall is their boundary against the other cells and the outside, so that the law holds for
+  // their total volume and the pressure acts on the wall around them. Throws std::invalid_argument
+  // when no cell is in `contents` or every cell is.
+  CavityTerm(const Discretisation& discretisation, const std::set<unsigned int>& contents, const CavityLaw& law);
   const char* name() const override { return "cavity"; }
   bool assemble(const AssemblyState& state, AssemblyTarget& target) override;
   bool rank_one(double& c, const dealii::Vector<double>*& g) const override;
@@ -33,6 +40,8 @@ class CavityTerm final : public Term {
   double pressure() const { return pressure_; }
 
  private:
+  void finish_setup(const Discretisation& discretisation, const std::string& what);
+
   CavityLaw law_;
   CavityWall wall_;
   double reference_volume_ = 0, stiffness_ = 0;

@@ -117,6 +117,13 @@ void QuasiStaticSolver::add_cavity(unsigned int boundary_id, const CavityLaw& la
   m.update_terms();
 }
 
+void QuasiStaticSolver::add_cavity(const std::set<unsigned int>& contents, const CavityLaw& law) {
+  Impl& m = *impl_;
+  if (m.cavity) throw std::invalid_argument("cavity: only one cavity per body");
+  m.cavity = std::make_unique<CavityTerm>(m.d, contents, law);
+  m.update_terms();
+}
+
 double QuasiStaticSolver::cavity_volume() const { return impl_->cavity ? impl_->cavity->volume(impl_->u) : 0.0; }
 double QuasiStaticSolver::cavity_reference_volume() const { return impl_->cavity ? impl_->cavity->reference_volume() : 0.0; }
 double QuasiStaticSolver::cavity_pressure() const { return impl_->cavity ? impl_->cavity->pressure() : 0.0; }

@@ -25,6 +25,7 @@
 #include <array>
 #include <functional>
 #include <memory>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -92,6 +93,10 @@ class QuasiStaticSolver {
   // part of the body's response: it is not scaled by load steps. Throws std::invalid_argument for
   // a surface that encloses no volume, a second cavity, or P2/Q2 elements.
   void add_cavity(unsigned int boundary_id, const CavityLaw& law);
+  // A cavity that is the cells of the material ids `contents` (amniotic fluid and the fetus in it,
+  // meshed as solids): the law holds for their total volume, and its pressure acts on the wall
+  // around them (cavity_term.h). The same exceptions, and for no such cells.
+  void add_cavity(const std::set<unsigned int>& contents, const CavityLaw& law);
   double cavity_volume() const;            // m^3, at the current state (0 without a cavity)
   double cavity_reference_volume() const;  // m^3
   double cavity_pressure() const;          // Pa

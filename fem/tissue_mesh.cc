@@ -229,6 +229,12 @@ TissueMeshInfo build_tissue_mesh(const config::MeshSpec& spec, Triangulation<3>&
   return info;
 }
 
+const TissueMeshInfo::Region* find_region(const TissueMeshInfo& mesh, const std::string& name) {
+  for (const auto& region : mesh.regions)
+    if (name == region.name || name == std::to_string(region.material_id)) return &region;
+  return nullptr;
+}
+
 std::string describe_region(const TissueMeshInfo::Region& region) {
   const std::string id = "id " + std::to_string(region.material_id);
   return region.name.empty() ? id : region.name + " (" + id + ")";
@@ -250,13 +256,10 @@ RegionMaterials assign_region_materials(const config::Scene& scene, const Tissue
   }
   for (std::size_t i = 0; i < scene.materials.size(); ++i) {
     const config::RegionMaterial& m = scene.materials[i];
-    bool found = false;
-    for (const auto& region : mesh.regions)
-      if (m.region == region.name || m.region == std::to_string(region.material_id)) {
-        found = true;
-        if (!out.of_region.count(region.material_id)) out.of_region[region.material_id] = static_cast<int>(i);
-      }
-    if (found) continue;
+    if (const TissueMeshInfo::Region* region = find_region(mesh, m.region)) {
+      if (!out.of_region.count(region->material_id)) out.of_region[region->material_id] = static_cast<int>(i);
+      continue;
+    }
     std::string message = "the mesh has no region '" + m.region + "'";
     const std::string suggestion = config::closest_match(m.region, names);
     if (!suggestion.empty()) message += "; did you mean '" + suggestion + "'?";

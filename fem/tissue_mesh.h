@@ -40,6 +40,8 @@ struct RegionMaterials {
   std::vector<config::Diagnostic> problems;
 };
 RegionMaterials assign_region_materials(const config::Scene& scene, const TissueMeshInfo& mesh);
+// The region named `name`, or whose material id `name` writes; nullptr if none.
+const TissueMeshInfo::Region* find_region(const TissueMeshInfo& mesh, const std::string& name);
 // "fluid (id 2)" or "id 2".
 std::string describe_region(const TissueMeshInfo::Region& region);
 

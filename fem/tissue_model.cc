@@ -105,17 +105,29 @@ std::unique_ptr<TissueModel> build_tissue_model(const config::Scene& scene) {
         });
   }
   if (scene.effects.has(config::Effect::cavity)) {
-    const auto found = model->mesh.boundary_ids.find(scene.effects.cavity_surface);
-    if (found == model->mesh.boundary_ids.end())
-      throw std::runtime_error("effect cavity: the mesh has no physical group " + scene.effects.cavity_surface);
     CavityLaw law;
     law.gas = scene.effects.cavity_law == config::PressureVolumeLaw::isothermal_gas;
     law.initial_pressure_pa = scene.effects.cavity_initial_pressure_pa;
     law.bulk_modulus_pa = scene.effects.cavity_bulk_modulus_pa;
+    const bool by_regions = !scene.effects.cavity_regions.empty();
+    const std::string what = by_regions ? "the regions it holds" : scene.effects.cavity_surface;
     try {
-      model->solver->add_cavity(found->second, law);
+      if (by_regions) {
+        std::set<unsigned int> contents;
+        for (const std::string& name : scene.effects.cavity_regions) {
+          const auto region = find_region(model->mesh, name);
+          if (!region) throw std::runtime_error("effect cavity: the mesh has no volume region " + name);
+          contents.insert(region->material_id);
+        }
+        model->solver->add_cavity(contents, law);
+      } else {
+        const auto found = model->mesh.boundary_ids.find(scene.effects.cavity_surface);
+        if (found == model->mesh.boundary_ids.end())
+          throw std::runtime_error("effect cavity: the mesh has no physical group " + scene.effects.cavity_surface);
+        model->solver->add_cavity(found->second, law);
+      }
     } catch (const std::invalid_argument& e) {
-      throw std::runtime_error("effect cavity on " + scene.effects.cavity_surface + ": " + e.what());
+      throw std::runtime_error("effect cavity on " + what + ": " + e.what());
     }
   }
   if (scene.effects.has(config::Effect::incompressibility)) {

@@ -91,7 +91,7 @@ std::uint8_t PhantomGeometry::label_at(const std::array<double, 3>& x) const {
   return kAmnioticFluid;
 }
 
-PhantomGeometry phantom_geometry(std::uint32_t seed) {
+PhantomGeometry phantom_geometry(std::uint32_t seed, const std::array<double, 3>& fetus_offset_mm) {
   Dice dice(seed);
   const auto jitter = [&](double value, double relative) { return value * dice.uniform(1 - relative, 1 + relative); };
   PhantomGeometry g;
@@ -102,7 +102,8 @@ PhantomGeometry phantom_geometry(std::uint32_t seed) {
   for (double& r : g.uterus_inner.radii) r -= wall;
   // The fetus in its own frame (x head-wards), turned by `yaw` and placed in the sac.
   const double yaw = dice.uniform(-0.35, 0.35);
-  const Vec centre{dice.uniform(-6, 2), dice.uniform(-4, 4), dice.uniform(-6, 0)};
+  Vec centre{dice.uniform(-6, 2), dice.uniform(-4, 4), dice.uniform(-6, 0)};
+  for (int d = 0; d < 3; ++d) centre[d] += fetus_offset_mm[d];
   const auto place = [&](const Vec& local) { return add(centre, rotate_z(local, yaw)); };
   g.trunk.radii = {jitter(27, 0.08), jitter(15, 0.08), jitter(14, 0.08)};
   g.trunk.centre = place({-10, 0, 0});
@@ -125,7 +126,7 @@ PhantomGeometry phantom_geometry(std::uint32_t seed) {
 Phantom make_phantom(const PhantomSettings& s) {
   if (!(s.spacing_mm > 0)) throw std::invalid_argument("phantom: the spacing must be positive");
   Phantom p;
-  p.geometry = phantom_geometry(s.seed);
+  p.geometry = phantom_geometry(s.seed, s.fetus_offset_mm);
   std::array<int, 3> n{};
   double voxels = 1;
   for (int d = 0; d < 3; ++d) {

@@ -62,6 +62,9 @@ struct PhantomSettings {
   double speckle_size_mm = 1.2;       // correlation length of the speckle
   double attenuation_per_mm = 0.006;  // mu, amplitude
   bool shadowing = true;
+  // The whole fetus moved by this much from where the seed puts it (a fetus lying against the
+  // front wall: {0, 0, 20}). Where it then reaches the wall the wall wins: the fetus is cut off.
+  std::array<double, 3> fetus_offset_mm{0, 0, 0};
 };
 
 // The shapes, after the seed's random variation: ellipsoids (centre, semi-axes, rotation about z)
@@ -88,7 +91,7 @@ struct Phantom {
   Volume<std::uint8_t> image;  // 0..255
 };
 
-PhantomGeometry phantom_geometry(std::uint32_t seed);
+PhantomGeometry phantom_geometry(std::uint32_t seed, const std::array<double, 3>& fetus_offset_mm = {0, 0, 0});
 // Throws std::invalid_argument for a spacing or size that is not positive, or a volume over 2^31 voxels.
 Phantom make_phantom(const PhantomSettings& settings);
 

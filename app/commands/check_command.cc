@@ -90,7 +90,8 @@ void check_group_names(SceneReport& report, const std::map<std::string, unsigned
                                               "].select.physical_group",
                                           message));
   }
-  if (scene.effects.has(config::Effect::cavity) && !available.count(scene.effects.cavity_surface))
+  if (scene.effects.has(config::Effect::cavity) && scene.effects.cavity_regions.empty() &&
+      !available.count(scene.effects.cavity_surface))
     report.errors.push_back(diagnostic_at(
         report.file, scene.mesh.where, "effects.cavity.surface",
         "the mesh has no boundary region named '" + scene.effects.cavity_surface + "'" +
@@ -106,6 +107,13 @@ void check_referenced_data(SceneReport& report) {
     report.tissue = fem::inspect_tissue_mesh(spec);
     check_group_names(report, report.tissue->boundary_ids);
     report.regions = fem::assign_region_materials(scene, *report.tissue);
+    for (const std::string& name : scene.effects.cavity_regions)
+      if (!fem::find_region(*report.tissue, name)) {
+        std::string regions;
+        for (const auto& region : report.tissue->regions) regions += (regions.empty() ? "" : ", ") + fem::describe_region(region);
+        report.errors.push_back(diagnostic_at(report.file, scene.mesh.where, "effects.cavity.regions",
+                                              "the mesh has no volume region '" + name + "' (its regions: " + regions + ")"));
+      }
     for (const config::Diagnostic& d : report.regions.problems)
       report.errors.push_back(diagnostic_at(report.file, {d.line, d.column}, d.key, d.message));
   };

@@ -27,6 +27,7 @@ struct PhantomOptions {
   std::string out = "fetouch-phantom";
   unsigned int seed = 1;
   double spacing_mm = 1.0;
+  std::vector<double> fetus_offset_mm{0, 0, 0};
   bool no_speckle = false;
   bool json = false;
 };
@@ -48,6 +49,7 @@ int run_phantom(const PhantomOptions& o) {
   imaging::PhantomSettings settings;
   settings.seed = o.seed;
   settings.spacing_mm = o.spacing_mm;
+  for (int d = 0; d < 3; ++d) settings.fetus_offset_mm[d] = o.fetus_offset_mm[d];
   settings.speckle = !o.no_speckle;
   const auto start = std::chrono::steady_clock::now();
   imaging::Phantom phantom;
@@ -76,6 +78,9 @@ int run_phantom(const PhantomOptions& o) {
   json.begin_object();
   json.key("seed").value(static_cast<long>(o.seed));
   json.key("spacing_mm").value(o.spacing_mm);
+  json.key("fetus_offset_mm").begin_array();
+  for (double v : o.fetus_offset_mm) json.value(v);
+  json.end_array();
   json.key("dimensions").begin_array();
   for (int d : phantom.image.dimensions) json.value(static_cast<long>(d));
   json.end_array();
@@ -123,6 +128,10 @@ void add_phantom_command(CLI::App& parent, int& exit_code) {
   cmd->add_option("--out", o->out, "Output folder")->capture_default_str();
   cmd->add_option("--seed", o->seed, "Random seed")->capture_default_str();
   cmd->add_option("--spacing", o->spacing_mm, "Voxel size in mm")->check(CLI::Range(0.2, 10.0))->capture_default_str();
+  cmd->add_option("--fetus-offset", o->fetus_offset_mm,
+                  "Move the fetus by X Y Z mm from where the seed puts it (each within 50 mm; the wall cuts it off where it reaches it)")
+      ->expected(3)
+      ->check(CLI::Range(-50.0, 50.0));
   cmd->add_flag("--no-speckle", o->no_speckle, "Echogenicity, attenuation and shadows only");
   cmd->add_flag("--json", o->json, "Print the JSON summary on stdout");
   cmd->callback([o, &exit_code]() { exit_code = run_phantom(*o); });

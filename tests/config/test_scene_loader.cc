@@ -236,5 +236,55 @@ TEST(SceneLoader, EffectParameters) {
   EXPECT_DOUBLE_EQ(s.material.c10_pa, 800);
 }
 
+// A cavity by the regions it holds; a surface and regions together, or neither, are errors at the
+// effect's line naming both ways; a region listed twice is an error at its entry.
+TEST(SceneLoader, CavityByRegions) {
+  const std::string head = "mesh: {generate: {shape: box, size_m: [0.1, 0.1, 0.1]}}\n"
+                           "material: {model: neo_hookean, youngs_modulus_pa: 5000, poisson_ratio: 0.4}\n"
+                           "effects:\n";
+  const auto s = parse_scene(head + "  - cavity: {regions: [fluid, 3]}\n", "inline", kData).scene;
+  ASSERT_EQ(s.effects.cavity_regions.size(), 2u);
+  EXPECT_EQ(s.effects.cavity_regions[0], "fluid");
+  EXPECT_EQ(s.effects.cavity_regions[1], "3");
+  EXPECT_TRUE(s.effects.cavity_surface.empty());
+  const auto error_of = [&](const std::string& effect) -> config::Diagnostic {
+    try {
+      parse_scene(head + effect, "inline", kData);
+    } catch (const SceneError& e) {
+      return e.diagnostics().at(0);
+    }
+    ADD_FAILURE() << "accepted: " << effect;
+    return {};
+  };
+  const config::Diagnostic both = error_of("  - cavity: {surface: inner, regions: [fluid]}\n");
+  EXPECT_EQ(both.line, 4);
+  EXPECT_NE(both.message.find("not both"), std::string::npos) << both.message;
+  const config::Diagnostic neither = error_of("  - cavity: {law: linear}\n");
+  EXPECT_NE(neither.message.find("regions"), std::string::npos) << neither.message;
+  EXPECT_NE(neither.message.find("surface"), std::string::npos) << neither.message;
+  const config::Diagnostic twice = error_of("  - cavity: {regions: [fluid, fluid]}\n");
+  EXPECT_EQ(twice.key, "effects.cavity.regions[1]");
+  EXPECT_EQ(twice.line, 4);
+  EXPECT_NE(twice.message.find("twice"), std::string::npos) << twice.message;
+  const config::Diagnostic empty = error_of("  - cavity: {regions: []}\n");
+  EXPECT_NE(empty.message.find("list of volume regions"), std::string::npos) << empty.message;
+}
+
+// The phantom's fetus moved: read in metres, refused beyond 5 cm.
+TEST(SceneLoader, PhantomFetusOffset) {
+  const std::string tail = "material: {model: neo_hookean, youngs_modulus_pa: 5000, poisson_ratio: 0.4}\n";
+  const auto s = parse_scene("mesh: {phantom: {seed: 2, fetus_offset_m: [0, 0.01, 0.028]}}\n" + tail, "inline", kData).scene;
+  EXPECT_DOUBLE_EQ(s.mesh.phantom.fetus_offset_m[1], 0.01);
+  EXPECT_DOUBLE_EQ(s.mesh.phantom.fetus_offset_m[2], 0.028);
+  try {
+    parse_scene("mesh: {phantom: {seed: 2, fetus_offset_m: [0, 0, 28]}}\n" + tail, "inline", kData);
+    ADD_FAILURE() << "an offset of 28 m was accepted";
+  } catch (const SceneError& e) {
+    EXPECT_EQ(e.diagnostics().at(0).key, "mesh.phantom.fetus_offset_m[2]");
+    EXPECT_EQ(e.diagnostics().at(0).line, 1);
+    EXPECT_NE(e.diagnostics().at(0).message.find("0.05 m"), std::string::npos) << e.what();
+  }
+}
+
 }  // namespace
 }  // namespace fetouch::config

@@ -137,6 +137,22 @@ TEST_F(RegionMaterials, MissingAndUnknownRegionsAreNamedWithTheirLine) {
   EXPECT_THROW(config::parse_scene(bar_scene(*mesh_, ""), "bar.yaml", "."), config::SceneError);
 }
 
+// A cavity by regions, named as the scene names them: the soft half of the bar holds it, so its
+// reference volume is that box's, L1 w^2 (exact: flat faces); a region the mesh lacks is named.
+TEST_F(RegionMaterials, ACavityByRegionsHoldsThoseRegionsVolume) {
+  const std::string materials = "material: {model: neo_hookean, youngs_modulus_pa: 2000, poisson_ratio: 0.3}\n";
+  const auto built = model(bar_scene(*mesh_, materials) + "effects:\n  - cavity: {regions: [soft]}\n");
+  EXPECT_NEAR(built->solver->cavity_reference_volume(), kL1 * kWidth * kWidth, 1e-12 * kL1 * kWidth * kWidth);
+  const auto by_id = model(bar_scene(*mesh_, materials) + "effects:\n  - cavity: {regions: [9]}\n");
+  EXPECT_NEAR(by_id->solver->cavity_reference_volume(), kL2 * kWidth * kWidth, 1e-12 * kL2 * kWidth * kWidth);
+  try {
+    model(bar_scene(*mesh_, materials) + "effects:\n  - cavity: {regions: [fluid]}\n");
+    ADD_FAILURE() << "a cavity of a region the mesh lacks was built";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("no volume region fluid"), std::string::npos) << e.what();
+  }
+}
+
 // `fetouch mesh --regions` output read back by the solver: a ball (label 2) in a shell (label 1),
 // written as .msh and as .vtu; deal.II sees the regions by name with the mesher's cells and volumes,
 // and a scene gives each its material by that name.

@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -56,6 +57,40 @@ TEST(Phantom, SameSeedSameBytesOtherSeedOtherFetus) {
   EXPECT_EQ(a.labels.data, b.labels.data);
   s.seed = 2;
   EXPECT_NE(make_phantom(s).labels.data, a.labels.data);
+}
+
+// Moving the fetus: its labels' centroid moves by the offset (to a voxel), the wall's labels are
+// unchanged, and its volume is kept while it stays clear of the wall.
+TEST(Phantom, TheFetusOffsetMovesTheFetusAndNothingElse) {
+  const auto centroid_and_volume = [](const Phantom& p) {
+    std::array<double, 4> c{0, 0, 0, 0};
+    const auto& l = p.labels;
+    for (int k = 0; k < l.dimensions[2]; ++k)
+      for (int j = 0; j < l.dimensions[1]; ++j)
+        for (int i = 0; i < l.dimensions[0]; ++i)
+          if (is_fetus(l.data[l.index(i, j, k)])) {
+            const auto x = l.position_mm(i, j, k);
+            for (int d = 0; d < 3; ++d) c[d] += x[d];
+            c[3] += 1;
+          }
+    for (int d = 0; d < 3; ++d) c[d] /= c[3];
+    c[3] *= l.voxel_volume_mm3();
+    return c;
+  };
+  PhantomSettings s;
+  s.speckle = false;
+  const Phantom home = make_phantom(s);
+  s.fetus_offset_mm = {4, -3, 12};
+  const Phantom moved = make_phantom(s);
+  const auto a = centroid_and_volume(home), b = centroid_and_volume(moved);
+  std::printf("fetus centroid (%.2f, %.2f, %.2f) mm -> (%.2f, %.2f, %.2f) mm, volume %.0f -> %.0f mm^3\n", a[0], a[1], a[2],
+              b[0], b[1], b[2], a[3], b[3]);
+  for (int d = 0; d < 3; ++d) EXPECT_NEAR(b[d] - a[d], s.fetus_offset_mm[d], 0.5);
+  EXPECT_NEAR(b[3], a[3], 0.01 * a[3]);
+  std::size_t wall_changed = 0;
+  for (std::size_t v = 0; v < home.labels.data.size(); ++v)
+    wall_changed += (home.labels.data[v] == kUterineWall) != (moved.labels.data[v] == kUterineWall);
+  EXPECT_EQ(wall_changed, 0u);
 }
 
 TEST(Phantom, SpeckleIsRayleighAndDepthAttenuates) {

@@ -18,6 +18,7 @@
 #include <set>
 
 #include "meshes/mesh_regions.h"
+#include "tests/support/tet_faces.h"
 
 namespace fetouch::meshes {
 namespace {
@@ -86,27 +87,11 @@ TEST(MeshRegions, TheVtuIsConformingAcrossTheInterface) {
   EXPECT_EQ(names->GetValue(1), "shell");
   EXPECT_EQ(names->GetValue(2), "ball");
   // No two points at the same place: the regions share their interface nodes.
-  std::set<std::array<double, 3>> places;
-  for (vtkIdType p = 0; p < grid->GetNumberOfPoints(); ++p) {
-    std::array<double, 3> x;
-    grid->GetPoint(p, x.data());
-    EXPECT_TRUE(places.insert(x).second) << "point " << p << " is duplicated";
-  }
+  EXPECT_TRUE(fetouch::testing::duplicated_points(grid).empty());
   // Every face of a tetrahedron: which elements (regions) hold it.
-  std::map<std::array<vtkIdType, 3>, std::vector<int>> faces;
+  const fetouch::testing::TetFaces faces = fetouch::testing::tet_faces(grid, material);
   std::set<int> regions;
-  for (vtkIdType c = 0; c < grid->GetNumberOfCells(); ++c) {
-    if (grid->GetCellType(c) != VTK_TETRA) continue;
-    vtkIdType n = 0;
-    const vtkIdType* v = nullptr;
-    grid->GetCellPoints(c, n, v);
-    regions.insert(material->GetValue(c));
-    for (int f = 0; f < 4; ++f) {
-      std::array<vtkIdType, 3> face{v[(f + 1) % 4], v[(f + 2) % 4], v[(f + 3) % 4]};
-      std::sort(face.begin(), face.end());
-      faces[face].push_back(material->GetValue(c));
-    }
-  }
+  for (const auto& [face, holders] : faces) regions.insert(holders.begin(), holders.end());
   EXPECT_EQ(regions, (std::set<int>{1, 2}));
   long interface = 0, outer = 0;
   for (const auto& [face, holders] : faces) {
