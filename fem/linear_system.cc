@@ -91,7 +91,7 @@ void LinearSystem::apply_supports(const std::vector<Support>& supports, double f
 void LinearSystem::set_rank_one(double c, const Vector<double>* g) {
   rank_one_c_ = g ? c : 0;
   rank_one_g_ = g;
-  y_current_ = false;
+  y_current_ = pg_current_ = false;
 }
 
 void LinearSystem::account(const TangentSystem::SolveStats& stats) {
@@ -132,10 +132,15 @@ void LinearSystem::apply_factorisation(const double* b, double* x, int columns) 
   // projection on such corrections loses every digit.
   const Vector<double>& g = *rank_one_g_;
   const std::size_t n = g.size();
-  Vector<double> pg(n);
-  TangentSystem::SolveStats g_stats = tangent_.apply_factorisation(g.begin(), pg.begin(), 1);
-  g_stats.iterations = 1;
-  account(g_stats);
+  if (!pg_current_ || pg_factorisations_ != tangent_.factorisations()) {
+    pg_.reinit(n);
+    TangentSystem::SolveStats g_stats = tangent_.apply_factorisation(g.begin(), pg_.begin(), 1);
+    g_stats.iterations = 1;
+    account(g_stats);
+    pg_current_ = true;
+    pg_factorisations_ = tangent_.factorisations();
+  }
+  const Vector<double>& pg = pg_;
   const double denominator = 1 + rank_one_c_ * (g * pg);
   for (int k = 0; k < columns; ++k) {
     double* column = x + std::size_t(k) * n;

@@ -76,7 +76,9 @@ class LinearSystem {
   void apply_factorisation(const double* b, double* x, int columns);
 
   // The tangent was assembled anew (drops y).
-  void tangent_changed() { y_current_ = false; }
+  void tangent_changed() { y_current_ = pg_current_ = false; }
+  // An assembly ran: the rank-one term's g may have moved with the state (drops P^-1 g).
+  void assembled() { pg_current_ = false; }
 
   struct Times {
     double factorisation_s = 0, solve_s = 0;
@@ -95,6 +97,10 @@ class LinearSystem {
   const dealii::Vector<double>* rank_one_g_ = nullptr;
   dealii::Vector<double> y_;
   bool y_current_ = false;
+  // P^-1 g for apply_factorisation, kept while g and the factorisation P are the same.
+  dealii::Vector<double> pg_;
+  bool pg_current_ = false;
+  int pg_factorisations_ = -1;
 };
 
 }  // namespace fetouch::fem

@@ -42,6 +42,7 @@ bool NewtonDriver::assemble(double lambda, Vector<double>& r, bool tangent, Vect
     return ok;
   };
   bool ok = true;
+  system_.assembled();  // before the terms: one that fails may have moved g already
   for (std::size_t i = 0; i < terms_.size(); ++i)
     if (terms_[i]->distributed() && ok) ok = timed(i);
   if (!d_.all_ranks(ok)) return assembly_s += since(start), false;
