@@ -28,6 +28,7 @@ class CavityTerm final : public Term {
   const char* name() const override { return "cavity"; }
   bool assemble(const AssemblyState& state, AssemblyTarget& target) override;
   bool rank_one(double& c, const dealii::Vector<double>*& g) const override;
+  double rank_one_load() const override;
   void complete_step(const LinearSystem& system, dealii::Vector<double>& du) override;
   void take_step(double alpha) override { pressure_ = step_start_ + alpha * dp_; }
   double unknown() const override { return pressure_; }

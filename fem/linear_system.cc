@@ -91,7 +91,8 @@ void LinearSystem::apply_supports(const std::vector<Support>& supports, double f
 void LinearSystem::set_rank_one(double c, const Vector<double>* g) {
   rank_one_c_ = g ? c : 0;
   rank_one_g_ = g;
-  y_current_ = pg_current_ = false;
+  y_current_ = false;
+  tangent_.set_rank_one(rank_one_c_, g ? g->begin() : nullptr);
 }
 
 void LinearSystem::account(const TangentSystem::SolveStats& stats) {
@@ -102,9 +103,11 @@ void LinearSystem::account(const TangentSystem::SolveStats& stats) {
 
 void LinearSystem::solve(const Vector<double>& rhs, Vector<double>& x, double tolerance, bool zero_guess) {
   x.reinit(rhs.size(), /*omit_zeroing_entries=*/!zero_guess);
-  account(tangent_.solve(rhs.begin(), x.begin(), tolerance, zero_guess));
-  if (rank_one_c_ != 0) {
-    // Sherman-Morrison: (K_s + c g g')^-1 b = x - c (g.x) / (1 + c g.y) y, x = K_s^-1 b, y = K_s^-1 g.
+  const TangentSystem::SolveStats stats = tangent_.solve(rhs.begin(), x.begin(), tolerance, zero_guess);
+  account(stats);
+  if (rank_one_c_ != 0 && !stats.rank_one) {
+    // The solve was with K_s alone (PETSc's paths): Sherman-Morrison, (K_s + c g g')^-1 b =
+    // x - c (g.x) / (1 + c g.y) y, x = K_s^-1 b, y = K_s^-1 g.
     const Vector<double>& g = *rank_one_g_;
     if (!y_current_) {
       y_.reinit(g.size(), /*omit_zeroing_entries=*/y_.size() == g.size());
@@ -125,29 +128,6 @@ void LinearSystem::apply_factorisation(const double* b, double* x, int columns) 
   TangentSystem::SolveStats stats = tangent_.apply_factorisation(b, x, columns);
   stats.iterations = 1;  // one blocked application
   account(stats);
-  if (rank_one_c_ == 0) return;
-  // The dense part too, by Sherman-Morrison with the same factorisation (P + c g g')^-1 b =
-  // P^-1 b - c (g.P^-1 b) / (1 + c g.P^-1 g) P^-1 g. Without it a correction carries a component
-  // along g that the rank-one term (a liquid's c ~ 10^12) weighs so heavily that a Galerkin
-  // projection on such corrections loses every digit.
-  const Vector<double>& g = *rank_one_g_;
-  const std::size_t n = g.size();
-  if (!pg_current_ || pg_factorisations_ != tangent_.factorisations()) {
-    pg_.reinit(n);
-    TangentSystem::SolveStats g_stats = tangent_.apply_factorisation(g.begin(), pg_.begin(), 1);
-    g_stats.iterations = 1;
-    account(g_stats);
-    pg_current_ = true;
-    pg_factorisations_ = tangent_.factorisations();
-  }
-  const Vector<double>& pg = pg_;
-  const double denominator = 1 + rank_one_c_ * (g * pg);
-  for (int k = 0; k < columns; ++k) {
-    double* column = x + std::size_t(k) * n;
-    const double gx = std::inner_product(g.begin(), g.end(), column, 0.0);
-    const double scale = -rank_one_c_ * gx / denominator;
-    for (std::size_t i = 0; i < n; ++i) column[i] += scale * pg[i];
-  }
 }
 
 }  // namespace fetouch::fem

@@ -64,9 +64,6 @@ class LinearSystem {
   void set_rank_one(double c, const dealii::Vector<double>* g);
   double rank_one_c() const { return rank_one_c_; }
   const dealii::Vector<double>* rank_one_g() const { return rank_one_g_; }
-  // y = K_s^-1 g of the current tangent (solved on first use after a tangent assembly).
-  const dealii::Vector<double>& rank_one_solution() const { return y_; }
-
   // x = K^-1 rhs to a relative residual `tolerance` (x holds the initial guess unless zero_guess),
   // constraints distributed.
   void solve(const dealii::Vector<double>& rhs, dealii::Vector<double>& x, double tolerance, bool zero_guess);
@@ -76,9 +73,9 @@ class LinearSystem {
   void apply_factorisation(const double* b, double* x, int columns);
 
   // The tangent was assembled anew (drops y).
-  void tangent_changed() { y_current_ = pg_current_ = false; }
+  void tangent_changed() { y_current_ = false; }
   // An assembly ran: the rank-one term's g may have moved with the state (drops P^-1 g).
-  void assembled() { pg_current_ = false; }
+  void assembled() { tangent_.rank_one_moved(); }
 
   struct Times {
     double factorisation_s = 0, solve_s = 0;
@@ -95,12 +92,8 @@ class LinearSystem {
   TangentSystem tangent_;
   double rank_one_c_ = 0;
   const dealii::Vector<double>* rank_one_g_ = nullptr;
-  dealii::Vector<double> y_;
+  dealii::Vector<double> y_;  // K_s^-1 g, where the tangent's solve leaves the rank-one part here
   bool y_current_ = false;
-  // P^-1 g for apply_factorisation, kept while g and the factorisation P are the same.
-  dealii::Vector<double> pg_;
-  bool pg_current_ = false;
-  int pg_factorisations_ = -1;
 };
 
 }  // namespace fetouch::fem

@@ -130,7 +130,14 @@ StepReport NewtonDriver::newton(double lambda, const NewtonSettings& s, double r
     // quadratic regime), aim the step straight at the convergence tolerance.
     const double eta = norm < 5e-2 * reference ? 0.5 * s.relative_tolerance * reference / norm : 1e-3;
     try {
-      system_.solve(r, du, std::clamp(eta, 1e-12, 1e-3), /*zero_guess=*/true);
+      const Vector<double>* rhs = &r;
+      for (const Term* term : terms_)
+        if (const double load = term->rank_one_load(); load != 0 && system_.rank_one_g()) {
+          shifted_ = r;
+          shifted_.add(load, *system_.rank_one_g());
+          rhs = &shifted_;
+        }
+      system_.solve(*rhs, du, std::clamp(eta, 1e-12, 1e-3), /*zero_guess=*/true);
     } catch (const std::runtime_error& e) {  // a singular tangent (past a limit point): the step fails
       report.failure = e.what();
       return report;

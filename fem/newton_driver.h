@@ -124,6 +124,7 @@ class NewtonDriver {
   void extrapolate_path(const std::vector<std::pair<double, dealii::Vector<double>>>& path, double at,
                         double target);
   std::vector<Term*> terms_;
+  dealii::Vector<double> shifted_;  // r with a term's rank-one load
   bool conservative_ = true;  // every term has an energy: the line search follows it
   bool tangent_current_ = false;
   bool tangent_assembled_ = false;  // the matrix holds the tangent of some recent state

@@ -318,13 +318,51 @@ TangentSystem::SolveStats TangentSystem::solve(const double* b, double* x, doubl
   return stats;
 }
 
+void TangentSystem::set_rank_one(double c, const double* g) {
+  rank_one_c_ = g ? c : 0;
+  rank_one_g_ = g;
+  pg_current_ = false;
+}
+
 TangentSystem::SolveStats TangentSystem::apply_factorisation(const double* b, double* x, int columns) {
   SolveStats stats;
+  apply_raw(b, x, columns, stats);
+  apply_rank_one(x, columns, stats);
+  return stats;
+}
+
+const std::vector<double>& TangentSystem::factorised_g(SolveStats& stats) {
+  if (!pg_current_ || pg_factorisations_ != factorisations_) {
+    pg_.assign(rows(), 0.0);
+    apply_raw(rank_one_g_, pg_.data(), 1, stats);
+    pg_current_ = true;
+    pg_factorisations_ = factorisations_;
+  }
+  return pg_;
+}
+
+// (P + c g g')^-1 b = P^-1 b - c (g.P^-1 b) / (1 + c g.P^-1 g) P^-1 g. Without it a correction
+// would carry a component along g that the rank-one term (a liquid's c ~ 10^12) weighs so heavily
+// that a Galerkin projection on such corrections loses every digit.
+void TangentSystem::apply_rank_one(double* x, int columns, SolveStats& stats) {
+  if (rank_one_c_ == 0) return;
+  const std::size_t n = rows();
+  const std::vector<double>& pg = factorised_g(stats);
+  const double* g = rank_one_g_;
+  const double denominator = 1 + rank_one_c_ * std::inner_product(g, g + n, pg.begin(), 0.0);
+  for (int k = 0; k < columns; ++k) {
+    double* column = x + std::size_t(k) * n;
+    const double scale = -rank_one_c_ * std::inner_product(g, g + n, column, 0.0) / denominator;
+    for (std::size_t i = 0; i < n; ++i) column[i] += scale * pg[i];
+  }
+}
+
+void TangentSystem::apply_raw(const double* b, double* x, int columns, SolveStats& stats) {
   if (direct_cholmod_ && (factor_->valid() && !refactor_ ? true : factor_cholmod(stats))) {
     const auto start = std::chrono::steady_clock::now();
     factor_->solve(b, x, columns);
     stats.solve_s += since(start);
-    return stats;
+    return;
   }
   Petsc& p = *petsc_;
   if (!p.factored || refactor_) factor(stats);
@@ -349,7 +387,7 @@ TangentSystem::SolveStats TangentSystem::apply_factorisation(const double* b, do
     }
   }
   stats.solve_s += since(start);
-  return stats;
 }
+
 
 }  // namespace fetouch::fem

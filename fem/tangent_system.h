@@ -75,8 +75,17 @@ class TangentSystem {
   struct SolveStats {
     int iterations = 0;       // CG iterations (0 when solved directly after a refactorisation)
     bool refactored = false;
+    bool rank_one = false;    // the solve was with K + c g g' (set_rank_one), not K alone
     double factor_s = 0, solve_s = 0;
   };
+  // A dense rank-one part c g g' of the operator (a liquid's volume constraint: c up to 10^13), or
+  // none (c = 0). g has rows() entries and must outlive the solves; rank_one_moved() when its values
+  // change. On one rank with CHOLMOD, solve() then solves with K + c g g' itself (CG on it,
+  // preconditioned by (P + c g g')^-1 by Sherman-Morrison; SolveStats::rank_one set); the PETSc paths
+  // solve with K alone and leave the rank-one part to the caller. apply_factorisation() always
+  // applies (P + c g g')^-1.
+  void set_rank_one(double c, const double* g);
+  void rank_one_moved() { pg_current_ = false; }
   // x = K^-1 b to a relative residual |b - K x| <= tolerance |b|; x holds the initial guess (or is
   // zeroed when `zero_guess`). Refactors when there is no factorisation, when asked to, or when CG
   // does not reach the tolerance within max_cg_iterations. Throws std::runtime_error on a PETSc
@@ -141,6 +150,15 @@ class TangentSystem {
   int background_factorisations_ = 0;
   std::vector<double> r_, z_, p_, q_;  // CG's vectors
   std::vector<double> snapshot_;       // PETSc: the K to factorise when taken up
+  // The rank-one part, and P^-1 g while g and the factorisation P stay the same.
+  void apply_raw(const double* b, double* x, int columns, SolveStats& stats);  // P^-1, no rank-one part
+  const std::vector<double>& factorised_g(SolveStats& stats);
+  void apply_rank_one(double* x, int columns, SolveStats& stats);  // x := (P + c g g')^-1 b from x = P^-1 b
+  double rank_one_c_ = 0;
+  const double* rank_one_g_ = nullptr;
+  std::vector<double> pg_;
+  bool pg_current_ = false;
+  int pg_factorisations_ = -1;
 };
 
 }  // namespace fetouch::fem

@@ -146,28 +146,41 @@ double TangentSystem::begin_frame(bool frame) {
   return 0;
 }
 
-// Preconditioned CG on the current K with the factorisation of an earlier one; a fresh
-// factorisation solves directly.
+// Preconditioned CG on the current K (+ c g g') with the factorisation of an earlier one (+ c g g',
+// by Sherman-Morrison); a fresh factorisation solves directly.
 TangentSystem::SolveStats TangentSystem::solve_cholmod(const double* b, double* x, double tolerance, bool zero_guess) {
   SolveStats stats;
   const int n = static_cast<int>(rows());
   if (zero_guess) std::fill(x, x + n, 0.0);
+  const auto precondition = [&](const double* in, double* out) {
+    factor_->solve(in, out);
+    apply_rank_one(out, 1, stats);
+  };
+  const double* g = rank_one_g_;
+  const auto apply_k = [&](const double* in, double* out) {  // out = (K + c g g') in
+    multiply(in, out);
+    if (rank_one_c_ == 0) return;
+    const double scale = rank_one_c_ * std::inner_product(g, g + n, in, 0.0);
+    for (int i = 0; i < n; ++i) out[i] += scale * g[i];
+  };
   const auto direct = [&] {
     const auto start = std::chrono::steady_clock::now();
-    factor_->solve(b, x);
+    precondition(b, x);
     stats.solve_s += since(start);
+    stats.rank_one = rank_one_c_ != 0;
   };
   if (!factor_->valid() || refactor_) {
     if (!factor_cholmod(stats)) return solve(b, x, tolerance, false);
     direct();
     return stats;
   }
+  if (rank_one_c_ != 0) factorised_g(stats);  // before the clock: timed by itself
   const auto start = std::chrono::steady_clock::now();
   const auto dot = [n](const std::vector<double>& a, const std::vector<double>& c) {
     return std::inner_product(a.begin(), a.begin() + n, c.begin(), 0.0);
   };
   const double b_norm = std::sqrt(std::inner_product(b, b + n, b, 0.0));
-  multiply(x, q_.data());
+  apply_k(x, q_.data());
   for (int i = 0; i < n; ++i) r_[i] = b[i] - q_[i];
   const double target = tolerance * b_norm;
   const int limit = in_frame_ ? max_background_cg_iterations : max_cg_iterations;
@@ -175,13 +188,13 @@ TangentSystem::SolveStats TangentSystem::solve_cholmod(const double* b, double* 
   int iterations = 0;
   double rz = 0;
   for (; !converged && iterations < limit; ++iterations) {
-    factor_->solve(r_.data(), z_.data());
+    precondition(r_.data(), z_.data());
     const double rz_new = dot(r_, z_);
     if (iterations == 0) p_ = z_;
     else
       for (int i = 0; i < n; ++i) p_[i] = z_[i] + (rz_new / rz) * p_[i];
     rz = rz_new;
-    multiply(p_.data(), q_.data());
+    apply_k(p_.data(), q_.data());
     const double alpha = rz / dot(p_, q_);
     if (!std::isfinite(alpha)) break;
     for (int i = 0; i < n; ++i) x[i] += alpha * p_[i], r_[i] -= alpha * q_[i];
@@ -190,6 +203,7 @@ TangentSystem::SolveStats TangentSystem::solve_cholmod(const double* b, double* 
   stats.iterations = iterations;
   stats.solve_s += since(start);
   if (converged) {
+    stats.rank_one = rank_one_c_ != 0;
     // Against the factorisation's own matrix CG takes one iteration: more than
     // refactor_after_iterations means K has drifted from it. (No baseline as for multigrid: a
     // factorisation taken up from the background is already a few frames old, and measuring drift

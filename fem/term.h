@@ -50,9 +50,12 @@ class Term {
   // A dense rank-one tangent part c g g' beside the sparse one (after a tangent assembly), applied
   // by the linear system through the Sherman-Morrison formula.
   virtual bool rank_one(double& /*c*/, const dealii::Vector<double>*& /*g*/) const { return false; }
-  // Complete the Newton step du for the term's unknown (du solves K du = r with K including the
-  // rank-one part); take_step(alpha) then moves the unknown by alpha times its step from where it
-  // was when the step was completed.
+  // The term's own equation, eliminated into the step: the right-hand side of K du = r gets this
+  // multiple of g (after an assembly).
+  virtual double rank_one_load() const { return 0; }
+  // Complete the Newton step du for the term's unknown (du solves K du = r + rank_one_load() g with
+  // K including the rank-one part); take_step(alpha) then moves the unknown by alpha times its step
+  // from where it was when the step was completed.
   virtual void complete_step(const LinearSystem& /*system*/, dealii::Vector<double>& /*du*/) {}
   virtual void take_step(double /*alpha*/) {}
   // The term's own equation holds (a cavity's volume law), beside the residual's norm.
