@@ -1,5 +1,6 @@
-// Two users feel each other (issue 6): `fetouch replay` on the shipped two-probe scene. User B
-// presses the right side of the phantom's uterus and holds still; user A then presses the left.
+// Two users feel each other (issue 6): `fetouch replay` on the shipped two-probe scenes. User B
+// presses the right side of the phantom's uterus and holds still; user A then presses the left. On
+// the homogeneous tissue (fetus_two_users_simple.yaml):
 //   - Through the FEM: B's force rises, by what the full solve needs to keep B's surface where B
 //     holds it. Checked with `fetouch solve` (static, nonlinear, independent of the haptic loop):
 //     B's baseline force alone, then A's held force with B's baseline force (B's surface is pushed
@@ -8,6 +9,9 @@
 //     compliance's cross terms), B's force follows A's within each frame, at the ratio the FEM's
 //     steady state has; with the coupling off it stays flat within frames (moving only at the
 //     solver's answers, one frame late), while the steady state is the FEM's either way.
+// On the anatomy (fetus_two_users.yaml, issue 15) the amniotic fluid carries A's press to B: the
+// static check as above; A's press moves B's surface more per newton than through the homogeneous
+// solid, and B feels as large a share of A's force.
 #include <gtest/gtest.h>
 #include <yaml-cpp/yaml.h>
 
@@ -77,57 +81,126 @@ double within_frame_ratio(const Session& r, long from, long to) {
   return db / da;
 }
 
-TEST(TwoUsers, EachFeelsTheOtherAsTheFemPredicts) {
-  const fs::path dir = fs::temp_directory_path() / ("fetouch_two_users_" + std::to_string(::getpid()));
+// A's press and B's answer in a replay: A's force at the end of its hold (3.85 s) and B's rise from
+// A's last tick out of contact to then.
+struct Felt {
+  Session run;
+  long before = 0, held = 3850;
+  double rise_a = 0, rise_b = 0;
+};
+
+Felt press_and_hold(const fs::path& scene, const fs::path& out) {
+  Felt felt;
+  felt.run = replay(scene, out);
+  const Session& r = felt.run;
+  EXPECT_EQ(r.patches.size(), 2u);
+  EXPECT_EQ(r.a.size(), 5001u);
+  if (r.a.size() != 5001u || r.b.size() != 5001u) return felt;
+  while (felt.before + 1 < felt.held && !r.a[felt.before + 1].in_contact) ++felt.before;
+  EXPECT_GT(felt.before, 1000);  // B has pressed and held for a while by then
+  EXPECT_TRUE(r.b[felt.before].in_contact);
+  EXPECT_TRUE(r.b[felt.held].in_contact);
+  felt.rise_a = r.a[felt.held].normal_force;
+  felt.rise_b = r.b[felt.held].normal_force - r.b[felt.before].normal_force;
+  std::printf("%s: A presses %.4f N; B, held still, goes from %.4f N to %.4f N (%+.4f N, %.4f of A's)\n",
+              scene.filename().c_str(), felt.rise_a, r.b[felt.before].normal_force, r.b[felt.held].normal_force,
+              felt.rise_b, felt.rise_b / felt.rise_a);
+  return felt;
+}
+
+// The full FEM: B's surface under B's baseline force (d0), then with A's press (d2: pushed out,
+// towards B's probe), then with A's press and B's final force (d1: back where B holds it).
+struct Static {
+  double d0 = 0, d1 = 0, d2 = 0;
+};
+
+Static static_solves(const fs::path& scene, const Felt& felt, const fs::path& dir) {
+  const Session& r = felt.run;
+  const Eigen::Vector3d a_held = on_tissue(r.a[felt.held]), b_before = on_tissue(r.b[felt.before]),
+                        b_held = on_tissue(r.b[felt.held]);
+  Static s;
+  s.d0 = b_displacement(scene, r, Eigen::Vector3d::Zero(), b_before, dir / "s0");
+  s.d2 = b_displacement(scene, r, a_held, b_before, dir / "s2");
+  s.d1 = b_displacement(scene, r, a_held, b_held, dir / "s1");
+  std::printf("B's surface along +x: %.4f mm alone, %.4f mm with A's press, %.4f mm with A's press and B's new force\n",
+              1e3 * s.d0, 1e3 * s.d2, 1e3 * s.d1);
+  return s;
+}
+
+fs::path fresh_directory(const std::string& name) {
+  const fs::path dir = fs::temp_directory_path() / (name + "_" + std::to_string(::getpid()));
   fs::remove_all(dir);
   fs::create_directories(dir);
-  const fs::path source = fs::path(FETOUCH_SOURCE_DIR) / "config" / "scenes";
-  const fs::path scene = source / "fetus_two_users.yaml";
+  return dir;
+}
+
+const fs::path kScenes = fs::path(FETOUCH_SOURCE_DIR) / "config" / "scenes";
+
+TEST(TwoUsers, EachFeelsTheOtherAsTheFemPredicts) {
+  const fs::path dir = fresh_directory("fetouch_two_users");
+  const fs::path scene = kScenes / "fetus_two_users_simple.yaml";
   // The same scene with the local model's coupling off (trajectories by absolute path).
   const fs::path uncoupled_scene = dir / "uncoupled.yaml";
   ASSERT_TRUE(write_scene_variant(scene, "coupling: true", "coupling: false", uncoupled_scene));
 
-  const Session coupled = replay(scene, dir / "coupled");
+  const Felt felt = press_and_hold(scene, dir / "coupled");
+  const Session& coupled = felt.run;
   const Session uncoupled = replay(uncoupled_scene, dir / "uncoupled");
-  ASSERT_EQ(coupled.patches.size(), 2u);
   ASSERT_EQ(coupled.a.size(), 5001u);
-
-  // Before A touches (its last tick out of contact), and at the end of A's hold (3.85 s).
-  long before = 0;
-  while (before + 1 < 3850 && !coupled.a[before + 1].in_contact) ++before;
-  ASSERT_GT(before, 1000);  // B has pressed and held for a while by then
-  const long held = 3850;
-  ASSERT_TRUE(coupled.b[before].in_contact);
-  ASSERT_TRUE(coupled.b[held].in_contact);
-  const double rise_a = coupled.a[held].normal_force, rise_b = coupled.b[held].normal_force - coupled.b[before].normal_force;
-  std::printf("A presses %.4f N; B, held still, goes from %.4f N to %.4f N (%+.4f N)\n", rise_a,
-              coupled.b[before].normal_force, coupled.b[held].normal_force, rise_b);
+  ASSERT_EQ(uncoupled.b.size(), 5001u);
+  const double rise_a = felt.rise_a, rise_b = felt.rise_b;
   EXPECT_GT(rise_a, 0.5);
   EXPECT_GT(rise_b, 0.05 * rise_a);  // B feels A push the sac towards it: its force rises
 
-  // The full FEM: B's surface under B's baseline force, then with A's press (pushed out, towards
-  // B's probe), then with A's press and B's final force (back where B holds it).
-  const Eigen::Vector3d a_held = on_tissue(coupled.a[held]), b_before = on_tissue(coupled.b[before]),
-                        b_held = on_tissue(coupled.b[held]);
-  const double d0 = b_displacement(scene, coupled, Eigen::Vector3d::Zero(), b_before, dir / "s0");
-  const double d2 = b_displacement(scene, coupled, a_held, b_before, dir / "s2");
-  const double d1 = b_displacement(scene, coupled, a_held, b_held, dir / "s1");
-  std::printf("B's surface along +x: %.4f mm alone, %.4f mm with A's press, %.4f mm with A's press and B's new force\n",
-              1e3 * d0, 1e3 * d2, 1e3 * d1);
-  EXPECT_GT(d2 - d0, 2e-4);  // A's press alone pushes B's surface out by a fraction of a millimetre or more
-  EXPECT_LT(std::abs(d1 - d0), 0.1 * (d2 - d0));  // B's rise is the force that holds it back
+  const Static s = static_solves(scene, felt, dir);
+  EXPECT_GT(s.d2 - s.d0, 2e-4);  // A's press alone pushes B's surface out by a fraction of a millimetre or more
+  EXPECT_LT(std::abs(s.d1 - s.d0), 0.1 * (s.d2 - s.d0));  // B's rise is the force that holds it back
 
   // The local model: the frames in which A's force rises (from its first contact to 95 %).
-  long rising_end = before;
+  long rising_end = felt.before;
   while (coupled.a[rising_end].normal_force < 0.95 * rise_a) ++rising_end;
   const double steady_ratio = rise_b / rise_a;
-  const double on = within_frame_ratio(coupled, before + 50, rising_end);
-  const double off = within_frame_ratio(uncoupled, before + 50, rising_end);
+  const double on = within_frame_ratio(coupled, felt.before + 50, rising_end);
+  const double off = within_frame_ratio(uncoupled, felt.before + 50, rising_end);
   std::printf("B's force per A's: steady %.4f; within frames %.4f coupled, %.4f uncoupled\n", steady_ratio, on, off);
   EXPECT_NEAR(on, steady_ratio, 0.3 * steady_ratio);
   EXPECT_LT(std::abs(off), 0.1 * steady_ratio);
   // Either way the tissue's answer is the same once A holds still: the steady forces agree.
-  EXPECT_NEAR(uncoupled.b[held].normal_force, coupled.b[held].normal_force, 0.01 * coupled.b[held].normal_force);
+  EXPECT_NEAR(uncoupled.b[felt.held].normal_force, coupled.b[felt.held].normal_force,
+              0.01 * coupled.b[felt.held].normal_force);
+  fs::remove_all(dir);
+}
+
+// The same presses on the anatomy (issue 15): the amniotic fluid keeps its volume, so A's press
+// raises the sac's pressure and pushes the wall out under B. B's force rises as a static solve of
+// the same scene says it must, and by more of A's force than in the homogeneous tissue: the fluid
+// carries the press across.
+TEST(TwoUsers, TheFluidCarriesOnePressToTheOtherUser) {
+  const fs::path dir = fresh_directory("fetouch_two_users_fluid");
+  const fs::path scene = kScenes / "fetus_two_users.yaml";
+  const Felt fluid = press_and_hold(scene, dir / "anatomy");
+  const Felt solid = press_and_hold(kScenes / "fetus_two_users_simple.yaml", dir / "homogeneous");
+  ASSERT_EQ(fluid.run.a.size(), 5001u);
+  ASSERT_EQ(solid.run.a.size(), 5001u);
+  EXPECT_GT(fluid.rise_a, 0.05);
+  EXPECT_GT(fluid.rise_b, 0);  // B feels A: its force rises
+
+  const Static s = static_solves(scene, fluid, dir);
+  EXPECT_GT(s.d2 - s.d0, 2e-4);                           // A's press alone pushes B's surface out
+  EXPECT_LT(std::abs(s.d1 - s.d0), 0.1 * (s.d2 - s.d0));  // B's rise is the force that holds it back
+  // The coupling: how far A's press moves B's surface per newton (the cross compliance, static),
+  // and the share of A's force that B feels rise (replayed).
+  const Static h = static_solves(kScenes / "fetus_two_users_simple.yaml", solid, dir / "homogeneous_static");
+  const double moved_fluid = (s.d2 - s.d0) / fluid.rise_a, moved_solid = (h.d2 - h.d0) / solid.rise_a;
+  const double through_fluid = fluid.rise_b / fluid.rise_a, through_solid = solid.rise_b / solid.rise_a;
+  std::printf("A's press moves B's surface %.2f mm/N through the fluid, %.2f mm/N through the homogeneous solid\n",
+              1e3 * moved_fluid, 1e3 * moved_solid);
+  std::printf("B's rise per A's force: %.4f through the fluid, %.4f through the homogeneous solid\n", through_fluid,
+              through_solid);
+  EXPECT_GT(moved_fluid, 2 * moved_solid);
+  // The share B feels is the cross compliance over B's own, and both grow with a softer tissue: the
+  // fluid keeps it (not less than nine tenths of the solid's).
+  EXPECT_GT(through_fluid, 0.9 * through_solid);
   fs::remove_all(dir);
 }
 
