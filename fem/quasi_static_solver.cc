@@ -24,7 +24,15 @@ std::string describe_frame(const SolveReport& r, const ComplianceTimes& c) {
                 r.total_iterations, r.carried ? " carried" : "", 1e3 * r.assembly_s, 1e3 * r.factorisation_s,
                 1e3 * r.solve_s, r.linear_iterations, 1e3 * c.assembly_s, 1e3 * c.factorisation_s, 1e3 * c.solves_s,
                 c.linear_iterations, c.galerkin_residual, c.refined ? ", solved" : "");
-  return line;
+  std::string text = line;
+  if (!r.term_assembly_s.empty()) {  // where the assembly went, per term
+    text += "; terms";
+    for (const auto& [name, seconds] : r.term_assembly_s) {
+      std::snprintf(line, sizeof line, " %s %.1f", name.c_str(), 1e3 * seconds);
+      text += line;
+    }
+  }
+  return text;
 }
 
 QuasiStaticSolver::QuasiStaticSolver(const Triangulation<3>& triangulation, const Material& material, int degree,
