@@ -10,9 +10,14 @@
 
 #include <gmsh.h>
 
+#include <unistd.h>
+
 #include <algorithm>
+#include <array>
 #include <cmath>
+#include <filesystem>
 #include <fstream>
+#include <map>
 #include <limits>
 #include <stdexcept>
 
@@ -49,6 +54,76 @@ std::map<std::string, unsigned int> gmsh_groups(const std::string& file, int dim
   }
   gmsh::finalize();
   return names;
+}
+
+// deal.II cannot hold a boundary id on a face inside the volume, so a .msh whose surface groups
+// include a mesher's interfaces between regions (`fetouch mesh --regions`) is read from a copy
+// without them: a surface entity every triangle of which two tetrahedra share goes, with its
+// groups. Returns the file to read (the given one when nothing is inner or Gmsh cannot tell, which
+// leaves the errors to deal.II's reader).
+static std::string without_inner_surfaces(const std::string& file) {
+  std::string copy;
+  gmsh::initialize();
+  gmsh::option::setNumber("General.Terminal", 0);
+  try {
+    gmsh::open(file);
+    std::vector<int> types;
+    std::vector<std::vector<std::size_t>> tags, nodes;
+    std::map<std::array<std::size_t, 3>, int> held;
+    gmsh::model::mesh::getElements(types, tags, nodes, 3);
+    for (std::size_t t = 0; t < types.size(); ++t) {
+      if (types[t] != 4) continue;  // 4-node tetrahedra
+      const auto& n = nodes[t];
+      for (std::size_t e = 0; e + 3 < n.size(); e += 4)
+        for (int f = 0; f < 4; ++f) {
+          std::array<std::size_t, 3> face{n[e + (f + 1) % 4], n[e + (f + 2) % 4], n[e + (f + 3) % 4]};
+          std::sort(face.begin(), face.end());
+          ++held[face];
+        }
+    }
+    gmsh::vectorpair surfaces, inner;
+    gmsh::model::getEntities(surfaces, 2);
+    for (const auto& surface : surfaces) {
+      gmsh::model::mesh::getElements(types, tags, nodes, 2, surface.second);
+      bool all_inner = !types.empty();
+      for (std::size_t t = 0; t < types.size() && all_inner; ++t) {
+        if (types[t] != 2) all_inner = false;  // 3-node triangles only
+        const auto& n = nodes[t];
+        for (std::size_t e = 0; e + 2 < n.size() && all_inner; e += 3) {
+          std::array<std::size_t, 3> face{n[e], n[e + 1], n[e + 2]};
+          std::sort(face.begin(), face.end());
+          const auto it = held.find(face);
+          all_inner = it != held.end() && it->second > 1;
+        }
+      }
+      if (all_inner) inner.push_back(surface);
+    }
+    if (!inner.empty()) {
+      gmsh::vectorpair groups, drop;
+      gmsh::model::getPhysicalGroups(groups, 2);
+      for (const auto& group : groups) {
+        std::vector<int> entities;
+        gmsh::model::getEntitiesForPhysicalGroup(2, group.second, entities);
+        if (std::any_of(entities.begin(), entities.end(), [&](int e) {
+              return std::find(inner.begin(), inner.end(), std::make_pair(2, e)) != inner.end();
+            }))
+          drop.push_back(group);
+      }
+      gmsh::model::removeEntities(inner);
+      try {  // Gmsh may have dropped a group with its last entity already
+        gmsh::model::removePhysicalGroups(drop);
+      } catch (const std::string&) {
+      }
+      copy = (std::filesystem::temp_directory_path() /
+              ("fetouch-" + std::to_string(::getpid()) + "-" + std::filesystem::path(file).filename().string()))
+                 .string();
+      gmsh::write(copy);
+    }
+  } catch (...) {  // Gmsh could not read it: deal.II's reader says why
+    copy.clear();
+  }
+  gmsh::finalize();
+  return copy.empty() ? file : copy;
 }
 
 // deal.II's exception text is a page (condition, backtrace); users need its "Additional information".
@@ -171,8 +246,15 @@ TissueMeshInfo build_tissue_mesh(const config::MeshSpec& spec, Triangulation<3>&
         }
         return std::runtime_error(file + ": deal.II could not read it: " + why);
       };
+      const std::string readable = without_inner_surfaces(file);
+      struct Remove {  // the copy, whatever happens
+        std::string path;
+        ~Remove() {
+          if (!path.empty()) std::filesystem::remove(path);
+        }
+      } remove{readable != file ? readable : std::string()};
       try {
-        in.read_msh(file);
+        in.read_msh(readable);
       } catch (const std::exception& e) {
         throw unreadable(short_message(e));
       } catch (const std::string& gmsh_error) {  // what Gmsh's API throws
@@ -181,7 +263,7 @@ TissueMeshInfo build_tissue_mesh(const config::MeshSpec& spec, Triangulation<3>&
         throw unreadable("Gmsh failed");
       }
       if (tria.n_active_cells() == 0) throw std::runtime_error(file + ": the mesh has no volume cells");
-      info.boundary_ids = gmsh_groups(file, 2);
+      info.boundary_ids = gmsh_groups(readable, 2);
       for (const auto& [name, tag] : gmsh_groups(file, 3)) volume_names[tag] = name;
       break;
     }

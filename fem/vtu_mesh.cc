@@ -16,6 +16,7 @@
 #include <array>
 #include <cmath>
 #include <filesystem>
+#include <map>
 #include <set>
 #include <stdexcept>
 #include <vector>
@@ -39,6 +40,34 @@ int corners_of(int type) {
 
 double signed_volume(const std::vector<Point<3>>& v, const std::vector<unsigned int>& c) {
   return ((v[c[1]] - v[c[0]]) * dealii::cross_product_3d(v[c[2]] - v[c[0]], v[c[3]] - v[c[0]])) / 6;
+}
+
+// Surface cells on faces inside the volume (a mesher's interfaces between regions, named surface
+// groups) bound nothing: deal.II holds boundary ids on boundary faces only, so they are left out,
+// and so are ids that only they had.
+void drop_inner_faces(const std::vector<dealii::CellData<3>>& cells, dealii::SubCellData& faces,
+                      std::set<unsigned int>& boundary_ids) {
+  static const std::vector<std::vector<int>> tet_faces{{1, 2, 3}, {0, 2, 3}, {0, 1, 3}, {0, 1, 2}};
+  static const std::vector<std::vector<int>> hex_faces{{0, 2, 4, 6}, {1, 3, 5, 7}, {0, 1, 4, 5},
+                                                       {2, 3, 6, 7}, {0, 1, 2, 3}, {4, 5, 6, 7}};
+  std::map<std::vector<unsigned int>, int> held;
+  for (const auto& cell : cells)
+    for (const auto& local : cell.vertices.size() == 4 ? tet_faces : hex_faces) {
+      std::vector<unsigned int> face;
+      for (const int k : local) face.push_back(cell.vertices[std::size_t(k)]);
+      std::sort(face.begin(), face.end());
+      ++held[face];
+    }
+  const auto inner = [&](const dealii::CellData<2>& face) {
+    std::vector<unsigned int> key = face.vertices;
+    std::sort(key.begin(), key.end());
+    const auto it = held.find(key);
+    return it != held.end() && it->second > 1;
+  };
+  auto& quads = faces.boundary_quads;
+  quads.erase(std::remove_if(quads.begin(), quads.end(), inner), quads.end());
+  boundary_ids.clear();
+  for (const auto& face : quads) boundary_ids.insert(face.boundary_id);
 }
 
 }  // namespace
@@ -135,6 +164,7 @@ std::map<std::string, unsigned int> read_vtu_mesh(const std::string& path, deali
     }
   }
   if (cells.empty()) throw std::runtime_error(path + ": no tetrahedra or hexahedra in the grid");
+  drop_inner_faces(cells, faces, boundary_ids);
   tria.clear();
   try {
     dealii::GridTools::delete_unused_vertices(vertices, cells, faces);

@@ -126,7 +126,10 @@ void assign_regions(VolumeMesh& mesh, const MaskVolume& labels, const std::vecto
   for (const std::uint8_t label : labels.data)
     if (region_of_label[label] >= 0) mesh.regions[std::size_t(region_of_label[label])].voxel_volume_m3 += voxel_m3;
   std::map<std::array<int, 3>, int> face_owner;
+  std::map<std::array<int, 3>, std::array<int, 3>> oriented;  // a face as its first element has it
   mesh.interface_triangles = 0;
+  mesh.interfaces.clear();
+  mesh.interface_regions.clear();
   for (std::size_t t = 0; t < mesh.tetrahedra.size(); ++t) {
     const Tet& tet = mesh.tetrahedra[t];
     VolumeMesh::RegionReport& report = mesh.regions[std::size_t(mesh.region[t])];
@@ -135,13 +138,25 @@ void assign_regions(VolumeMesh& mesh, const MaskVolume& labels, const std::vecto
     report.volume_m3 += tet_signed_volume(p[std::size_t(tet[0])], p[std::size_t(tet[1])], p[std::size_t(tet[2])], p[std::size_t(tet[3])]);
     report.min_dihedral_deg = std::min(report.min_dihedral_deg, min_dihedral_deg(p, tet));
     for (int f = 0; f < 4; ++f) {
-      std::array<int, 3> face{tet[(f + 1) % 4], tet[(f + 2) % 4], tet[(f + 3) % 4]};
+      // Face f, opposite corner f, turned so that its normal points out of the (positive) tetrahedron.
+      std::array<int, 3> out{tet[(f + 1) % 4], tet[(f + 2) % 4], tet[(f + 3) % 4]};
+      if (f % 2 == 1) std::swap(out[1], out[2]);
+      std::array<int, 3> face = out;
       std::sort(face.begin(), face.end());
       const auto [it, inserted] = face_owner.emplace(face, static_cast<int>(t));
-      if (!inserted) {
-        mesh.interface_triangles += mesh.region[std::size_t(it->second)] != mesh.region[t];
-        face_owner.erase(it);
+      if (inserted) {
+        oriented[face] = out;
+        continue;
       }
+      const int first = mesh.region[std::size_t(it->second)], second = mesh.region[t];
+      if (first != second) {
+        ++mesh.interface_triangles;
+        // Out of the lower region: the first element's orientation if it is the lower one.
+        mesh.interfaces.push_back(first < second ? oriented[face] : out);
+        mesh.interface_regions.push_back({std::min(first, second), std::max(first, second)});
+      }
+      oriented.erase(face);
+      face_owner.erase(it);
     }
   }
   mesh.boundary_region.assign(mesh.boundary.size(), 0);
@@ -157,6 +172,15 @@ void assign_regions(VolumeMesh& mesh, const MaskVolume& labels, const std::vecto
     if (report.tetrahedra == 0)
       throw std::runtime_error("region " + report.name + " got no element at this element size (" +
                                std::to_string(report.voxel_volume_m3 * 1e6) + " cm^3 of voxels): mesh finer or merge it");
+}
+
+std::vector<std::pair<std::string, long>> interface_groups(const VolumeMesh& mesh) {
+  std::map<std::array<int, 2>, long> counts;
+  for (const auto& pair : mesh.interface_regions) ++counts[pair];
+  std::vector<std::pair<std::string, long>> groups;
+  for (const auto& [pair, faces] : counts)
+    groups.emplace_back(mesh.region_names.at(std::size_t(pair[0])) + "_" + mesh.region_names.at(std::size_t(pair[1])), faces);
+  return groups;
 }
 
 }  // namespace fetouch::meshes

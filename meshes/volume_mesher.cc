@@ -32,6 +32,7 @@
 #include <cstdlib>
 #include <cmath>
 #include <map>
+#include <map>
 #include <stdexcept>
 
 namespace fetouch::meshes {
@@ -62,6 +63,17 @@ vtkSmartPointer<vtkPolyData> smoothed(vtkPolyData* surface, int iterations) {
   smooth->NormalizeCoordinatesOn();
   smooth->Update();
   return smooth->GetOutput();
+}
+
+// Each interface face's group, an index into interface_groups(mesh).
+std::vector<int> interface_ids(const VolumeMesh& mesh) {
+  std::map<std::array<int, 2>, int> index;
+  for (const auto& pair : mesh.interface_regions) index.emplace(pair, 0);
+  int next = 0;
+  for (auto& [pair, id] : index) id = next++;
+  std::vector<int> ids;
+  for (const auto& pair : mesh.interface_regions) ids.push_back(index[pair]);
+  return ids;
 }
 
 void report(const MeshingSettings& s, const std::string& step, double done) {
@@ -388,12 +400,22 @@ void write_volume_mesh(const VolumeMesh& mesh, const std::filesystem::path& path
       grid->InsertNextCell(VTK_TRIANGLE, 3, v);
       boundary->InsertNextValue(regions ? mesh.boundary_region[k] : 0), material->InsertNextValue(-1);
     }
+    // Interfaces: boundary ids after the outer surfaces', in interface_groups' order (inner faces:
+    // the solver reads them as names only).
+    const auto interfaces = interface_ids(mesh);
+    for (std::size_t k = 0; k < mesh.interfaces.size(); ++k) {
+      const auto& t = mesh.interfaces[k];
+      const vtkIdType v[3] = {t[0], t[1], t[2]};
+      grid->InsertNextCell(VTK_TRIANGLE, 3, v);
+      boundary->InsertNextValue(static_cast<int>(mesh.region_names.size()) + interfaces[k]), material->InsertNextValue(-1);
+    }
     grid->GetCellData()->AddArray(boundary);
     grid->GetCellData()->AddArray(material);
     auto names = vtkSmartPointer<vtkStringArray>::New();
     names->SetName("boundary_names");
     if (!regions) names->InsertNextValue("surface");
     for (const auto& region : mesh.region_names) names->InsertNextValue(region + "_outer");
+    for (const auto& [name, faces] : interface_groups(mesh)) names->InsertNextValue(name);
     grid->GetFieldData()->AddArray(names);
     if (regions) {  // entry i names material id i (0 unused)
       auto region_names = vtkSmartPointer<vtkStringArray>::New();
@@ -438,6 +460,20 @@ void write_volume_mesh(const VolumeMesh& mesh, const std::filesystem::path& path
     // Volume groups 1..n are the regions (material ids); surface groups 1..n their outer surfaces.
     gmsh::model::setPhysicalName(2, gmsh::model::addPhysicalGroup(2, {r}, regions ? r : 1), regions ? group + "_outer" : "surface");
     gmsh::model::setPhysicalName(3, gmsh::model::addPhysicalGroup(3, {r}, regions ? r : 2), group);
+  }
+  // Interfaces: one discrete surface and group each, tags n + 1, n + 2, ... (bounding no volume).
+  if (regions) {
+    const auto groups = interface_groups(mesh);
+    const auto ids = interface_ids(mesh);
+    std::vector<std::vector<std::size_t>> faces(groups.size());
+    for (std::size_t k = 0; k < mesh.interfaces.size(); ++k)
+      for (int v : mesh.interfaces[k]) faces[std::size_t(ids[k])].push_back(std::size_t(v) + 1);
+    for (std::size_t g = 0; g < groups.size(); ++g) {
+      const int tag = n + 1 + static_cast<int>(g);
+      gmsh::model::addDiscreteEntity(2, tag);
+      gmsh::model::mesh::addElementsByType(tag, 2, {}, faces[g]);
+      gmsh::model::setPhysicalName(2, gmsh::model::addPhysicalGroup(2, {tag}, tag), groups[g].first);
+    }
   }
   if (partitions > 1) gmsh::model::mesh::partition(partitions);
   gmsh::option::setNumber("Mesh.MshFileVersion", 4.1);

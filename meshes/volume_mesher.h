@@ -67,7 +67,14 @@ struct VolumeMesh {
   std::vector<int> boundary_region;  // per boundary triangle: its element's region
   std::vector<RegionReport> regions;
   long interface_triangles = 0;  // faces shared by elements of two regions
+  // Those faces, each oriented out of its lower region, and the regions on either side (lower
+  // index first); written as surface groups named LOWER_HIGHER (`wall_fluid`).
+  std::vector<std::array<int, 3>> interfaces;
+  std::vector<std::array<int, 2>> interface_regions;
 };
+
+// The interfaces' names in the order their groups are written (by region pair), with their faces.
+std::vector<std::pair<std::string, long>> interface_groups(const VolumeMesh& mesh);
 
 // Throws std::runtime_error: an empty mask, a surface that is not closed or not manifold after
 // repair, a target size too small for the memory (more than 20 million elements estimated), Gmsh

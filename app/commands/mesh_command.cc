@@ -168,6 +168,9 @@ int run_mesh(const MeshOptions& o) {
   }
   json.end_array();
   json.key("interface_triangles").value(mesh.interface_triangles);
+  json.key("interfaces").begin_object();  // surface group name: its triangles
+  for (const auto& [name, faces] : meshes::interface_groups(mesh)) json.key(name).value(faces);
+  json.end_object();
   json.key("seconds").value(seconds);
   json.end_object();
   if (o.json) {
@@ -187,7 +190,13 @@ int run_mesh(const MeshOptions& o) {
       std::printf("  region %s: %ld tetrahedra, %.4g ml against %.4g ml of voxels (%+.2f %%), smallest dihedral %.1f deg, %ld outer triangles\n",
                   region.name.c_str(), region.tetrahedra, region.volume_m3 * 1e6, region.voxel_volume_m3 * 1e6,
                   100 * (region.volume_m3 / region.voxel_volume_m3 - 1), region.min_dihedral_deg, region.outer_triangles);
-    if (!mesh.regions.empty()) std::printf("  %ld interface triangles between regions\n", mesh.interface_triangles);
+    if (!mesh.regions.empty()) {
+      std::string groups;
+      for (const auto& [name, faces] : meshes::interface_groups(mesh))
+        groups += (groups.empty() ? "" : ", ") + name + " " + std::to_string(faces);
+      std::printf("  %ld interface triangles between regions (surface groups: %s)\n", mesh.interface_triangles,
+                  groups.empty() ? "none" : groups.c_str());
+    }
     std::printf("  wrote %s and %s (open the .vtu in ParaView)\n", msh.string().c_str(), vtu.string().c_str());
   }
   if (std::abs(volume_error) > 0.03)
@@ -210,7 +219,8 @@ void add_mesh_command(CLI::App& parent, int& exit_code) {
       "degenerate and the boundary is closed and manifold.\n"
       "With --regions, one mesh of the regions' union whose elements each take the region covering most\n"
       "of them (the regions share their interfaces node for node; an interface follows element faces),\n"
-      "volume groups named as given, surface groups NAME_outer, and a report per region.\n"
+      "volume groups named as given, surface groups NAME_outer and one per interface, A_B (the\n"
+      "regions in the order given), and a report per region.\n"
       "Example: fetouch mesh phantom/phantom_labels.mha --labels 3 4 5 6 --size 3 --out fetus.msh\n"
       "         fetouch mesh phantom/phantom_labels.mha --regions wall=1 fluid=2 fetus=3,4,5,6 --size 4");
   cmd->add_option("volume", o->volume, "Volume (.mha, .mhd, .vti, .nrrd)")->required()->check(CLI::ExistingFile);
@@ -218,7 +228,7 @@ void add_mesh_command(CLI::App& parent, int& exit_code) {
   cmd->add_option("--labels", o->labels, "The labels that make the tissue (label maps)");
   cmd->add_option("--regions", o->regions,
                   "Regions of a label map, NAME=L1,L2 each: one conforming mesh of their union, each element in the "
-                  "region covering most of it (volume groups NAME, surfaces NAME_outer)");
+                  "region covering most of it (volume groups NAME, surfaces NAME_outer and A_B per interface)");
   cmd->add_flag("--fetus", o->fetus, "Segment the fetus of a fetal ultrasound volume");
   cmd->add_option("--threshold", o->threshold, "Intensity threshold (default: between the 5th and 95th percentiles)");
   cmd->add_option("--smoothing", o->smoothing, "Speckle filter before the threshold: none, gaussian or median (3x3x3)")

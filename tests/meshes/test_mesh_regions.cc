@@ -1,9 +1,11 @@
 // Multi-region meshes from a label map (meshes/mesh_regions.h): a ball inside a shell, meshed as
 // one conforming mesh whose elements take their region. Checked against the geometry (the regions'
 // exact volumes) and, read back from the .vtu with VTK, against conformity: every interface face
-// shared by exactly two elements of different regions, no node duplicated across an interface.
+// shared by exactly two elements of different regions, no node duplicated across an interface; the
+// interface written as its own named surface group.
 #include <gtest/gtest.h>
 #include <vtkCellData.h>
+#include <vtkCellType.h>
 #include <vtkFieldData.h>
 #include <vtkIntArray.h>
 #include <vtkSmartPointer.h>
@@ -12,6 +14,7 @@
 #include <vtkXMLUnstructuredGridReader.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <filesystem>
 #include <map>
@@ -102,6 +105,56 @@ TEST(MeshRegions, TheVtuIsConformingAcrossTheInterface) {
   EXPECT_EQ(interface, mesh.interface_triangles);
   EXPECT_GT(interface, 0);
   EXPECT_EQ(outer, static_cast<long>(mesh.boundary.size()));
+
+  // The interface as a surface group of its own: boundary id 2 (after the outer surfaces' 0 and 1),
+  // named shell_ball, exactly the faces the two regions share, each facing out of the shell's
+  // element that holds it (away from that element's fourth corner).
+  auto* boundary = vtkIntArray::SafeDownCast(grid->GetCellData()->GetArray("boundary_id"));
+  auto* boundary_names = vtkStringArray::SafeDownCast(grid->GetFieldData()->GetAbstractArray("boundary_names"));
+  ASSERT_TRUE(boundary && boundary_names);
+  ASSERT_EQ(boundary_names->GetNumberOfValues(), 3);
+  EXPECT_EQ(boundary_names->GetValue(2), "shell_ball");
+  std::map<std::array<vtkIdType, 3>, vtkIdType> shell_corner;  // a shell element's face: its fourth corner
+  for (vtkIdType c = 0; c < grid->GetNumberOfCells(); ++c) {
+    if (grid->GetCellType(c) != VTK_TETRA || material->GetValue(c) != 1) continue;
+    vtkIdType n = 0;
+    const vtkIdType* v = nullptr;
+    grid->GetCellPoints(c, n, v);
+    for (int f = 0; f < 4; ++f) {
+      std::array<vtkIdType, 3> face{v[(f + 1) % 4], v[(f + 2) % 4], v[(f + 3) % 4]};
+      std::sort(face.begin(), face.end());
+      shell_corner[face] = v[f];
+    }
+  }
+  long grouped = 0, outwards = 0, shared = 0;
+  for (vtkIdType c = 0; c < grid->GetNumberOfCells(); ++c) {
+    if (grid->GetCellType(c) != VTK_TRIANGLE || boundary->GetValue(c) != 2) continue;
+    vtkIdType n = 0;
+    const vtkIdType* v = nullptr;
+    grid->GetCellPoints(c, n, v);
+    std::array<vtkIdType, 3> face{v[0], v[1], v[2]};
+    std::sort(face.begin(), face.end());
+    const auto holders = faces.find(face);
+    shared += holders != faces.end() && holders->second.size() == 2 && holders->second[0] != holders->second[1];
+    ++grouped;
+    const auto corner = shell_corner.find(face);
+    if (corner == shell_corner.end()) continue;
+    double p[4][3];
+    for (int k = 0; k < 3; ++k) grid->GetPoint(v[k], p[k]);
+    grid->GetPoint(corner->second, p[3]);
+    double a[3], b[3], normal[3], out = 0;
+    for (int d = 0; d < 3; ++d) a[d] = p[1][d] - p[0][d], b[d] = p[2][d] - p[0][d];
+    normal[0] = a[1] * b[2] - a[2] * b[1], normal[1] = a[2] * b[0] - a[0] * b[2], normal[2] = a[0] * b[1] - a[1] * b[0];
+    for (int d = 0; d < 3; ++d) out += normal[d] * (p[0][d] - p[3][d]);
+    outwards += out > 0;
+  }
+  EXPECT_EQ(grouped, interface);
+  EXPECT_EQ(shared, grouped);
+  EXPECT_EQ(outwards, grouped);
+  const auto groups = interface_groups(mesh);
+  ASSERT_EQ(groups.size(), 1u);
+  EXPECT_EQ(groups[0].first, "shell_ball");
+  EXPECT_EQ(groups[0].second, interface);
 }
 
 TEST(MeshRegions, RegionTextsAreCheckedAndLabelsBelongToOneRegion) {
