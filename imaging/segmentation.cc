@@ -193,7 +193,7 @@ Mask segment_fetus(const Volume<float>& image, const FetusSegmentation& s) {
   return fill_holes(close(connected_component(high, ComponentChoice::largest_interior), s.closing_radius));
 }
 
-Mask segment_tissue(const Volume<float>& v, const TissueSegmentation& s) {
+Mask segment_tissue(const Volume<float>& v, const TissueSegmentation& s, float* threshold_used) {
   if (!s.labels.empty()) return fill_holes(connected_component(select_labels(v, s.labels), ComponentChoice::largest));
   if (s.fetus) return segment_fetus(v, FetusSegmentation{});
   const Volume<float> smooth = s.smoothing == TissueSegmentation::Smoothing::gaussian ? gaussian_smooth(v, s.smoothing_mm)
@@ -202,6 +202,13 @@ Mask segment_tissue(const Volume<float>& v, const TissueSegmentation& s) {
   float t = 0;
   if (s.threshold) {
     t = *s.threshold;
+  } else if (s.threshold_percentile) {
+    if (!(*s.threshold_percentile >= 0 && *s.threshold_percentile <= 100))
+      throw std::invalid_argument("the threshold percentile must be from 0 to 100, not " + std::to_string(*s.threshold_percentile));
+    std::vector<float> values = smooth.data;
+    const std::size_t at = std::min(values.size() - 1, static_cast<std::size_t>(*s.threshold_percentile / 100 * double(values.size())));
+    std::nth_element(values.begin(), values.begin() + std::ptrdiff_t(at), values.end());
+    t = values[at];
   } else {
     std::vector<float> sorted = smooth.data;
     std::sort(sorted.begin(), sorted.end());
@@ -211,6 +218,7 @@ Mask segment_tissue(const Volume<float>& v, const TissueSegmentation& s) {
                                " (a blank or constant volume); give --threshold or --labels if this is meant");
     t = 0.5f * (low + high);
   }
+  if (threshold_used) *threshold_used = t;
   const Mask region = connected_component(threshold(smooth, t, 1e30f), ComponentChoice::largest);
   return fill_holes(close(region, s.closing));
 }

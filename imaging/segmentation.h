@@ -51,18 +51,21 @@ Mask segment_fetus(const Volume<float>& image, const FetusSegmentation& settings
 //   - labels: the voxels of these labels of a label map, the largest piece, holes filled;
 //   - fetus: segment_fetus above;
 //   - otherwise: smoothing (Gaussian of smoothing_mm, or the 3 x 3 x 3 median, or none), a
-//     threshold (default: halfway between the 5th and 95th percentiles of the smoothed volume),
+//     threshold (a value in the image's units, or a percentile of the smoothed volume; default:
+//     halfway between the 5th and 95th percentiles of the smoothed volume),
 //     the largest connected region, closing by `closing` voxels and hole filling.
 // Throws std::runtime_error for an empty segmentation.
 struct TissueSegmentation {
   std::vector<int> labels;
   bool fetus = false;
   std::optional<float> threshold;
+  std::optional<double> threshold_percentile;  // 0..100, of the smoothed volume
   enum class Smoothing { none, gaussian, median } smoothing = Smoothing::gaussian;
   double smoothing_mm = 1.0;
   int closing = 2;
 };
-Mask segment_tissue(const Volume<float>& volume, const TissueSegmentation& settings);
+// `threshold_used`, if given, receives the threshold applied (the intensity pipeline only).
+Mask segment_tissue(const Volume<float>& volume, const TissueSegmentation& settings, float* threshold_used = nullptr);
 
 // Dice coefficient 2|A n B| / (|A| + |B|) of two masks of the same dimensions.
 double dice(const Mask& a, const Mask& b);

@@ -9,7 +9,7 @@
 namespace fetouch::imaging {
 
 struct VolumeInfo {
-  std::string format;  // "MetaImage", "VTK image data", "NRRD", "DICOM series"
+  std::string format;  // "MetaImage", "VTK image data", "NRRD", "NIfTI", "DICOM series"
   std::array<int, 3> dimensions{0, 0, 0};
   std::array<double, 3> spacing_mm{0, 0, 0};
   std::array<double, 3> origin_mm{0, 0, 0};
@@ -21,7 +21,7 @@ struct VolumeInfo {
   std::array<double, 3> extent_mm() const;  // dimensions x spacing
 };
 
-// Reads the header of a .mha/.mhd, .vti, .nrrd/.nhdr file or a folder holding a DICOM series
+// Reads the header of a .mha/.mhd, .vti, .nrrd/.nhdr, .nii/.nii.gz/.hdr file or a folder holding a DICOM series
 // (imaging/volume_io.cc reads both headers and volumes).
 // Throws std::runtime_error naming the file and what is wrong with it.
 VolumeInfo read_volume_info(const std::filesystem::path& path);

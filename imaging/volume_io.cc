@@ -1,5 +1,6 @@
 #include "imaging/volume_io.h"
 
+#include "imaging/nifti_io.h"
 #include "imaging/volume_header.h"
 #include "imaging/volume_info.h"
 #include "imaging/vtk_message.h"
@@ -131,7 +132,7 @@ std::unique_ptr<OpenVolume> open_volume(const std::filesystem::path& path) {
     v->reader = r, v->format = "NRRD";
   } else {
     throw std::runtime_error(name + ": unknown volume format '" + e +
-                             "'; expected .mha, .mhd, .vti, .nrrd, .nhdr or a folder with a DICOM series");
+                             "'; expected .mha, .mhd, .vti, .nrrd, .nhdr, .nii, .nii.gz, .hdr or a folder with a DICOM series");
   }
   v->errors = std::make_unique<ReaderErrors>(v->reader);
   {
@@ -352,6 +353,11 @@ VolumeInfo read_volume_info(const std::filesystem::path& path) {
     info.direction = series.direction, info.components = 1, info.scalar_type = "float";
     return info;
   }
+  if (is_nifti_name(path)) {
+    const VolumeInfo info = read_nifti_info(path);
+    check_plausible(path, info);
+    return info;
+  }
   auto v = open_volume(path);
   return info_of(path, *v);
 }
@@ -360,6 +366,10 @@ Volume<float> read_volume(const std::filesystem::path& path) {
   const std::string name = path.string();
   std::error_code ec;
   if (std::filesystem::is_directory(path, ec)) return read_dicom_series(path);
+  if (is_nifti_name(path)) {
+    check_plausible(path, read_nifti_info(path));
+    return read_nifti(path);
+  }
   auto opened = open_volume(path);
   const VolumeInfo info = info_of(path, *opened);
   vtkImageData* image = run(opened->reader);

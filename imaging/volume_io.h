@@ -1,5 +1,6 @@
 // Reading and writing whole volumes: MetaImage (.mha, .mhd + raw; written compressed), VTK image
-// data (.vti) and NRRD (.nrrd, .nhdr; read only), by extension. Spacing and origin are kept (mm).
+// data (.vti), NRRD (.nrrd, .nhdr; read only) and NIfTI-1 (.nii, .nii.gz, .hdr + .img; read only,
+// imaging/nifti_io.h), by extension. Spacing and origin are kept (mm).
 #pragma once
 
 #include <cstdint>

@@ -1,5 +1,6 @@
 #include "meshes/volume_mesher.h"
 
+#include "meshes/gmsh_fill.h"
 #include "meshes/tet_repair.h"
 
 #include <gmsh.h>
@@ -12,6 +13,7 @@
 #include <vtkFloatArray.h>
 #include <vtkImageData.h>
 #include <vtkImageGaussianSmooth.h>
+#include <vtkImageResample.h>
 #include <vtkIntArray.h>
 #include <vtkMassProperties.h>
 #include <vtkPointData.h>
@@ -29,6 +31,9 @@
 #include <vtkXMLUnstructuredGridWriter.h>
 
 #include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <iterator>
 #include <cstdlib>
 #include <cmath>
 #include <map>
@@ -65,35 +70,13 @@ vtkSmartPointer<vtkPolyData> smoothed(vtkPolyData* surface, int iterations) {
   return smooth->GetOutput();
 }
 
-// Each interface face's group, an index into interface_groups(mesh).
-std::vector<int> interface_ids(const VolumeMesh& mesh) {
-  std::map<std::array<int, 2>, int> index;
-  for (const auto& pair : mesh.interface_regions) index.emplace(pair, 0);
-  int next = 0;
-  for (auto& [pair, id] : index) id = next++;
-  std::vector<int> ids;
-  for (const auto& pair : mesh.interface_regions) ids.push_back(index[pair]);
-  return ids;
+double seconds_since(std::chrono::steady_clock::time_point start) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
 
 void report(const MeshingSettings& s, const std::string& step, double done) {
   if (s.progress) s.progress(step, done);
 }
-
-// A Gmsh session for one call (Gmsh is global state).
-struct GmshSession {
-  GmshSession() {
-    gmsh::initialize();
-    gmsh::option::setNumber("General.Terminal", std::getenv("FETOUCH_GMSH_LOG") ? 1 : 0);
-    gmsh::option::setNumber("General.Verbosity", 1);
-    // One thread: HXT in parallel gives a different mesh from run to run.
-    gmsh::option::setNumber("General.NumThreads", 1);
-    gmsh::option::setNumber("Mesh.MaxNumThreads1D", 1);
-    gmsh::option::setNumber("Mesh.MaxNumThreads2D", 1);
-    gmsh::option::setNumber("Mesh.MaxNumThreads3D", 1);
-  }
-  ~GmshSession() { gmsh::finalize(); }
-};
 
 // Refuses settings that make no sense or a mesh too large for the memory, from the volume to fill.
 void check_settings(double volume_mm3, const MeshingSettings& s) {
@@ -118,7 +101,8 @@ namespace {
 
 // Orients, checks (and where it can, repairs) a triangle surface in millimetres, and fills it with
 // tetrahedra (metres).
-VolumeMesh fill_surface(vtkSmartPointer<vtkPolyData> surface, const MeshingSettings& s, VolumeMesh out) {
+VolumeMesh fill_surface(vtkSmartPointer<vtkPolyData> surface, const MeshingSettings& s, VolumeMesh out,
+                        const std::vector<FillPath>& paths, const std::string& surface_name) {
   auto triangles = vtkSmartPointer<vtkTriangleFilter>::New();
   triangles->SetInputData(surface);
   auto tidy = vtkSmartPointer<vtkCleanPolyData>::New();
@@ -151,134 +135,87 @@ VolumeMesh fill_surface(vtkSmartPointer<vtkPolyData> surface, const MeshingSetti
   out.closed_manifold = true;
   out.surface_triangles = surface->GetNumberOfPolys();
 
-  // 3. Gmsh fills the surface with tetrahedra.
+  // 3. Gmsh fills the surface with tetrahedra, along the first path that gives a valid mesh (no
+  // element inverted or degenerate, the boundary closed and manifold) whose smallest dihedral angle,
+  // after the sliver repair, reaches the bound; the best valid mesh otherwise (the caller refuses it).
   report(s, "volume meshing", 0.3);
-  GmshSession session;
-  std::vector<std::size_t> node_tags(surface->GetNumberOfPoints());
-  std::vector<double> coordinates;
-  coordinates.reserve(3 * node_tags.size());
-  for (vtkIdType i = 0; i < surface->GetNumberOfPoints(); ++i) {
-    double x[3];
-    surface->GetPoint(i, x);
-    node_tags[i] = std::size_t(i) + 1;
-    for (double c : x) coordinates.push_back(c * 1e-3);  // mm -> m
-  }
-  std::vector<std::size_t> triangle_nodes;
+  std::vector<double> nodes_mm(3 * std::size_t(surface->GetNumberOfPoints()));
+  for (vtkIdType i = 0; i < surface->GetNumberOfPoints(); ++i) surface->GetPoint(i, &nodes_mm[3 * std::size_t(i)]);
+  std::vector<std::size_t> corners;
   auto ids = vtkSmartPointer<vtkIdList>::New();
   for (vtkIdType c = 0; c < surface->GetNumberOfCells(); ++c) {
     surface->GetCellPoints(c, ids);
-    for (vtkIdType k = 0; k < 3; ++k) triangle_nodes.push_back(std::size_t(ids->GetId(k)) + 1);
+    for (vtkIdType k = 0; k < 3; ++k) corners.push_back(std::size_t(ids->GetId(k)));
   }
-  const auto add_surface = [&] {
-    gmsh::model::add("tissue");
-    gmsh::model::addDiscreteEntity(2, 1);
-    gmsh::model::mesh::addNodes(2, 1, node_tags, coordinates);
-    gmsh::model::mesh::addElementsByType(1, 2, {}, triangle_nodes);
-  };
-  // The surface is split into patches Gmsh can parametrise and remesh at the target size (the
-  // decimated triangles are too uneven for good tetrahedra next to them). No feature angle: the
-  // tissue's surface is smooth, and feature curves kept the decimation's folds as creases. A
-  // surface Gmsh cannot parametrise is kept as it is.
-  std::vector<int> patch_tags{1};
-  try {
-    add_surface();
-    gmsh::model::mesh::classifySurfaces(M_PI, true, true, M_PI);
-    gmsh::model::mesh::createGeometry();
-    std::vector<std::pair<int, int>> patches;
-    gmsh::model::getEntities(patches, 2);
-    patch_tags.clear();
-    for (const auto& [dim, tag] : patches) patch_tags.push_back(tag);
-    out.surface_remeshed = true;
-  } catch (const std::string&) {
-    gmsh::model::remove();
-    add_surface();
-  }
-  try {
-    const int loop = gmsh::model::geo::addSurfaceLoop(patch_tags);
-    gmsh::model::geo::addVolume({loop}, 1);
-    gmsh::model::geo::synchronize();
-  } catch (const std::string& e) {
-    throw std::runtime_error("meshing: Gmsh could not bound a volume by the surface: " + e);
-  }
-  const double h = s.element_size_mm * 1e-3;
-  gmsh::option::setNumber("Mesh.MeshSizeMax", h);
-  gmsh::option::setNumber("Mesh.MeshSizeMin", 0.2 * (s.refine_radius_mm > 0 ? std::min(h, s.refine_size_mm * 1e-3) : h));
-  if (s.refine_radius_mm > 0) {
-    // Finer elements in a ball (where the probe touches), grading to the element size over one
-    // more radius.
-    const int ball = gmsh::model::mesh::field::add("Ball");
-    gmsh::model::mesh::field::setNumber(ball, "Radius", s.refine_radius_mm * 1e-3);
-    gmsh::model::mesh::field::setNumber(ball, "Thickness", s.refine_radius_mm * 1e-3);
-    gmsh::model::mesh::field::setNumber(ball, "VIn", s.refine_size_mm * 1e-3);
-    gmsh::model::mesh::field::setNumber(ball, "VOut", h);
-    gmsh::model::mesh::field::setNumber(ball, "XCenter", s.refine_center_mm[0] * 1e-3);
-    gmsh::model::mesh::field::setNumber(ball, "YCenter", s.refine_center_mm[1] * 1e-3);
-    gmsh::model::mesh::field::setNumber(ball, "ZCenter", s.refine_center_mm[2] * 1e-3);
-    gmsh::model::mesh::field::setAsBackgroundMesh(ball);
-  }
-  gmsh::option::setNumber("Mesh.Optimize", 1);
-  // HXT, then the optimiser on every element of quality (gamma) under 0.5: on the phantom's fetus
-  // the plain Delaunay mesher left slivers of 1.3 degrees, HXT with the default threshold 9.3.
-  gmsh::option::setNumber("Mesh.Algorithm3D", 10);
-  gmsh::option::setNumber("Mesh.OptimizeThreshold", 0.5);
-  try {
-    gmsh::model::mesh::generate(3);
-    report(s, "quality optimisation", 0.8);
-    // Debian's Gmsh has no Netgen: its own optimiser, then node relocation.
-    gmsh::model::mesh::optimize("", false, 2);
-    gmsh::model::mesh::optimize("Relocate3D");
-  } catch (const std::string& e) {  // Gmsh's API throws its message as a string
-    throw std::runtime_error("meshing: Gmsh could not fill the surface: " + e);
-  } catch (const std::exception& e) {
-    throw std::runtime_error(std::string("meshing: Gmsh could not fill the surface: ") + e.what());
-  }
-  try {
-    std::vector<std::size_t> mesh_tags, element_tags, element_nodes;  // Gmsh takes non-empty vectors as preallocated
-    std::vector<double> all_coordinates, parametric;
-    gmsh::model::mesh::getNodes(mesh_tags, all_coordinates, parametric, -1, -1, false, false);
-    std::map<std::size_t, int> index;
-    for (std::size_t i = 0; i < mesh_tags.size(); ++i) {
-      index[mesh_tags[i]] = static_cast<int>(i);
-      out.nodes_m.push_back({all_coordinates[3 * i], all_coordinates[3 * i + 1], all_coordinates[3 * i + 2]});
+  const VolumeMesh base = out;
+  bool have = false;
+  std::string failures;
+  for (std::size_t k = 0; k < std::size(paths); ++k) {
+    const FillPath path = paths[k];
+    const auto path_started = std::chrono::steady_clock::now();
+    VolumeMesh mesh = base;
+    std::string outcome;
+    try {
+      GmshFill fill = gmsh_fill(nodes_mm, corners, s, path);
+      mesh.nodes_m = std::move(fill.nodes_m), mesh.tetrahedra = std::move(fill.tetrahedra);
+      mesh.surface_remeshed = fill.surface_remeshed;
+      const auto repair_started = std::chrono::steady_clock::now();
+      // Slivers the optimiser left (against the surface, whose nodes it keeps): peeled, flipped
+      // away or relocated (meshes/tet_repair.h), then the boundary as the elements now have it.
+      report(s, "sliver repair", 0.3 + 0.6 * (k + 0.8) / std::size(paths));
+      mesh.repair = repair_slivers(mesh.nodes_m, mesh.tetrahedra, std::max(12.0, s.min_dihedral_deg + 2));
+      mesh.boundary = boundary_faces(mesh.tetrahedra);
+      mesh.closed_manifold = boundary_is_closed_manifold(mesh.tetrahedra);
+      mesh.quality = mesh_quality(mesh.nodes_m, mesh.tetrahedra);
+      mesh.volume_m3 = mesh.quality.volume_m3;
+      mesh.optimisation_seconds = fill.optimisation_seconds + seconds_since(repair_started);
+      char text[200];
+      std::snprintf(text, sizeof text, "%zu tetrahedra, smallest dihedral %.1f deg%s%s", mesh.tetrahedra.size(),
+                    mesh.quality.min_dihedral_deg, mesh.closed_manifold ? "" : ", boundary NOT closed and manifold",
+                    mesh.quality.inverted + mesh.quality.degenerate > 0 ? ", inverted or degenerate elements" : "");
+      outcome = text;
+    } catch (const std::exception& e) {
+      outcome = std::string("failed: ") + e.what();
+      failures += (failures.empty() ? "" : "; ") + surface_name + describe(path) + ": " + e.what();
     }
-    gmsh::model::mesh::getElementsByType(4, element_tags, element_nodes, -1);
-    if (element_nodes.empty()) throw std::runtime_error("meshing: Gmsh made no tetrahedra");
-    for (std::size_t e = 0; e < element_nodes.size(); e += 4) {
-      Tet t{index.at(element_nodes[e]), index.at(element_nodes[e + 1]), index.at(element_nodes[e + 2]),
-            index.at(element_nodes[e + 3])};
-      if (tet_signed_volume(out.nodes_m[t[0]], out.nodes_m[t[1]], out.nodes_m[t[2]], out.nodes_m[t[3]]) < 0)
-        std::swap(t[2], t[3]);
-      out.tetrahedra.push_back(t);
+    char timing[40];
+    std::snprintf(timing, sizeof timing, " (%.1f s)", seconds_since(path_started));
+    out.attempts.push_back(surface_name + describe(path) + ": " + outcome + timing);
+    const bool valid = !mesh.tetrahedra.empty() && mesh.closed_manifold && mesh.quality.inverted == 0 && mesh.quality.degenerate == 0;
+    if (valid && (!have || mesh.quality.min_dihedral_deg > out.quality.min_dihedral_deg)) {
+      const auto attempts = out.attempts;
+      const auto phases = out.phases;
+      out = std::move(mesh);
+      out.attempts = attempts, out.phases = phases;
+      out.path = surface_name + describe(path);
+      have = true;
     }
-  } catch (const std::string& e) {
-    throw std::runtime_error("meshing: Gmsh: " + e);
+    if (have && out.quality.min_dihedral_deg >= s.min_dihedral_deg) break;
+    report(s, "volume meshing", 0.3 + 0.6 * (k + 1.0) / std::size(paths));
   }
-  // Slivers the optimiser left (against the surface, whose nodes it keeps): peeled, flipped away
-  // or relocated (meshes/tet_repair.h), then the boundary as the elements now have it.
-  report(s, "sliver repair", 0.9);
-  out.repair = repair_slivers(out.nodes_m, out.tetrahedra, 12);
-  out.boundary = boundary_faces(out.tetrahedra);
-  out.closed_manifold = boundary_is_closed_manifold(out.tetrahedra);
-  out.quality = mesh_quality(out.nodes_m, out.tetrahedra);
-  out.volume_m3 = out.quality.volume_m3;
-  report(s, "done", 1.0);
+  if (!have) throw std::runtime_error("no path gave a valid mesh (" + failures + ")");
+  out.quality_met = out.quality.min_dihedral_deg >= s.min_dihedral_deg;
   return out;
 }
 
-}  // namespace
-
-VolumeMesh mesh_mask(const MaskVolume& mask, const MeshingSettings& s) {
-  VolumeMesh out;
-  long voxels = 0;
-  for (auto v : mask.data) voxels += v != 0;
-  if (voxels == 0) throw std::runtime_error("meshing: the segmentation is empty (no voxel set)");
-  const double voxel_mm3 = mask.spacing_mm[0] * mask.spacing_mm[1] * mask.spacing_mm[2];
-  out.segmented_volume_m3 = voxels * voxel_mm3 * 1e-9;
-  check_settings(voxels * voxel_mm3, s);
-
-  // 1. The mask, padded by two empty voxels (so that the surface closes at the volume's faces).
+// The surface of the mask, in millimetres and in space; `smoother`: blurred twice as much, on a
+// grid of half the element size (features below the element size smoothed away).
+vtkSmartPointer<vtkPolyData> mask_surface(const MaskVolume& mask, const MeshingSettings& s, bool smoother, VolumeMesh& out) {
+  // 1. The mask, blurred and contoured at 0.5 on a grid of about a third of the element size (at
+  // most the voxels'): the surface comes with triangles near the element size and without features
+  // far below it, so the clean-up has little to decimate (decimating a million triangles was most of
+  // the time on a head MRI, and its folds made surfaces that intersect themselves). Padded with empty
+  // voxels so that the surface closes at the volume's faces.
   report(s, "surface extraction", 0.0);
-  const int pad = 2;
+  const double grid_mm = s.element_size_mm / (smoother ? 2 : 3);
+  std::array<double, 3> sigma{}, magnify{};
+  bool resample = false;
+  for (int d = 0; d < 3; ++d) {
+    magnify[d] = grid_mm > 1.2 * mask.spacing_mm[d] ? mask.spacing_mm[d] / grid_mm : 1.0;
+    resample = resample || magnify[d] < 1;
+    sigma[d] = std::max(0.7, 0.5 / magnify[d]) * (smoother ? 2 : 1);  // voxels: half the new grid's spacing
+  }
+  const int pad = 2 + static_cast<int>(std::ceil(2 * std::max({sigma[0], sigma[1], sigma[2]})));
   auto image = vtkSmartPointer<vtkImageData>::New();
   image->SetDimensions(mask.dimensions[0] + 2 * pad, mask.dimensions[1] + 2 * pad, mask.dimensions[2] + 2 * pad);
   image->SetSpacing(mask.spacing_mm.data());
@@ -295,10 +232,18 @@ VolumeMesh mesh_mask(const MaskVolume& mask, const MeshingSettings& s) {
   image->GetPointData()->SetScalars(values);
   auto blur = vtkSmartPointer<vtkImageGaussianSmooth>::New();
   blur->SetInputData(image);
-  blur->SetStandardDeviations(0.7, 0.7, 0.7);
+  blur->SetStandardDeviations(sigma.data());
   blur->SetRadiusFactors(2, 2, 2);
+  vtkSmartPointer<vtkAlgorithm> field = blur;
+  if (resample) {
+    auto coarse = vtkSmartPointer<vtkImageResample>::New();
+    coarse->SetInputConnection(blur->GetOutputPort());
+    for (int d = 0; d < 3; ++d) coarse->SetAxisMagnificationFactor(d, magnify[d]);
+    coarse->SetInterpolationModeToLinear();
+    field = coarse;
+  }
   auto contour = vtkSmartPointer<vtkFlyingEdges3D>::New();
-  contour->SetInputConnection(blur->GetOutputPort());
+  contour->SetInputConnection(field->GetOutputPort());
   contour->SetValue(0, 0.5);
   contour->ComputeNormalsOff();
   contour->ComputeGradientsOff();
@@ -309,7 +254,14 @@ VolumeMesh mesh_mask(const MaskVolume& mask, const MeshingSettings& s) {
   auto clean = vtkSmartPointer<vtkCleanPolyData>::New();
   clean->SetInputConnection(largest->GetOutputPort());
   clean->Update();
-  if (clean->GetOutput()->GetNumberOfPolys() == 0) throw std::runtime_error("meshing: the segmentation has no surface");
+  if (clean->GetOutput()->GetNumberOfPolys() == 0) {
+    char text[300];
+    std::snprintf(text, sizeof text,
+                  "meshing: nothing is left of the segmentation (%.4g ml) once smoothed at the element size: no part of "
+                  "it is thicker than about %.2g mm (a smaller --size keeps thinner parts)",
+                  out.segmented_volume_m3 * 1e6, 2 * grid_mm);
+    throw std::runtime_error(text);
+  }
 
   // 2. Smoothing that does not shrink, decimation towards the element size.
   report(s, "surface clean-up", 0.15);
@@ -320,16 +272,22 @@ VolumeMesh mesh_mask(const MaskVolume& mask, const MeshingSettings& s) {
   const double triangle_area = std::sqrt(3.0) / 4 * s.element_size_mm * s.element_size_mm;
   const double wanted = std::max(200.0, mass->GetSurfaceArea() / triangle_area);
   const double have = surface->GetNumberOfPolys();
-  if (wanted < have) {
+  if (wanted < have && !smoother) {  // the smoother surface is already on a grid near the element size
     auto decimate = vtkSmartPointer<vtkQuadricDecimation>::New();
     decimate->SetInputData(surface);
     decimate->SetTargetReduction(1 - wanted / have);
     decimate->VolumePreservationOn();
     decimate->Update();
-    surface = decimate->GetOutput();
     // Decimation folds the surface here and there; smoothing again unfolds it (else Gmsh cannot
     // parametrise the spine's surface, and the folds make slivers).
-    surface = smoothed(decimate->GetOutput(), 10);
+    vtkSmartPointer<vtkPolyData> decimated = smoothed(decimate->GetOutput(), 10);
+    // Quadric decimation does not keep the topology: on a folded surface (a brain's gyri) it
+    // pinches edges into non-manifold ones. Then the surface stays as extracted (Gmsh remeshes it).
+    if (open_edges(decimated) > 0) {
+      decimated = surface;
+      out.decimation_skipped = true;
+    }
+    surface = decimated;
   }
   // Into space: the image's index axes along its direction cosines, about its origin.
   if (mask.direction != std::array<double, 9>{1, 0, 0, 0, 1, 0, 0, 0, 1}) {
@@ -349,7 +307,60 @@ VolumeMesh mesh_mask(const MaskVolume& mask, const MeshingSettings& s) {
     placed->SetPoints(points);
     surface = placed;
   }
-  return fill_surface(surface, s, out);
+  return surface;
+}
+
+}  // namespace
+
+VolumeMesh mesh_mask(const MaskVolume& mask, const MeshingSettings& s) {
+  VolumeMesh out;
+  long voxels = 0;
+  for (auto v : mask.data) voxels += v != 0;
+  if (voxels == 0) throw std::runtime_error("meshing: the segmentation is empty (no voxel set)");
+  const double voxel_mm3 = mask.spacing_mm[0] * mask.spacing_mm[1] * mask.spacing_mm[2];
+  out.segmented_volume_m3 = voxels * voxel_mm3 * 1e-9;
+  check_settings(voxels * voxel_mm3, s);
+  // The surface as extracted, remeshed by Gmsh or kept; if neither gives the quality asked, a
+  // smoother surface (what was in the way is most often a feature thinner than the elements: two
+  // sides of an ear or a fold whose triangles cross once remeshed at the element size).
+  double surface_seconds = 0, fill_seconds = 0;
+  std::vector<std::string> attempts;
+  VolumeMesh best;
+  bool have = false;
+  std::string failures;
+  for (const bool smoother : {false, true}) {
+    auto phase = std::chrono::steady_clock::now();
+    vtkSmartPointer<vtkPolyData> surface;
+    try {
+      surface = mask_surface(mask, s, smoother, out);
+    } catch (const std::exception& e) {
+      if (!smoother || have) throw;
+      failures += std::string("; smoother surface: ") + e.what();
+      break;
+    }
+    surface_seconds += seconds_since(phase);
+    phase = std::chrono::steady_clock::now();
+    try {
+      VolumeMesh mesh = fill_surface(surface, s, out,
+                                     smoother ? std::vector<FillPath>{FillPath::remeshed_hxt}
+                                              : std::vector<FillPath>{FillPath::remeshed_hxt, FillPath::surface_hxt},
+                                     smoother ? "smoother surface, " : "");
+      attempts.insert(attempts.end(), mesh.attempts.begin(), mesh.attempts.end());
+      if (!have || mesh.quality.min_dihedral_deg > best.quality.min_dihedral_deg) best = std::move(mesh), have = true;
+    } catch (const std::exception& e) {
+      failures += (failures.empty() ? "" : "; ") + std::string(e.what());
+      attempts.push_back(std::string(smoother ? "smoother surface: " : "surface: ") + e.what());
+    }
+    fill_seconds += seconds_since(phase);
+    if (have && best.quality_met) break;
+  }
+  if (!have) throw std::runtime_error("meshing: " + failures);
+  best.attempts = attempts;
+  best.phases = {{"surface", surface_seconds},
+                 {"volume mesh", fill_seconds - best.optimisation_seconds},
+                 {"optimisation", best.optimisation_seconds}};
+  report(s, "done", 1.0);
+  return best;
 }
 
 VolumeMesh mesh_triangle_surface(const std::vector<Point3>& nodes_mm, const std::vector<Triangle>& triangles,
@@ -370,119 +381,9 @@ VolumeMesh mesh_triangle_surface(const std::vector<Point3>& nodes_mm, const std:
   surface->SetPoints(points);
   surface->SetPolys(cells);
   if (triangles.empty()) throw std::runtime_error("meshing: the surface has no triangle");
-  return fill_surface(surface, s, VolumeMesh{});
-}
-
-void write_volume_mesh(const VolumeMesh& mesh, const std::filesystem::path& path, int partitions) {
-  const std::string name = path.string();
-  const std::string e = path.extension().string();
-  if (e == ".vtu") {
-    auto grid = vtkSmartPointer<vtkUnstructuredGrid>::New();
-    auto points = vtkSmartPointer<vtkPoints>::New();
-    points->SetDataTypeToDouble();
-    for (const auto& p : mesh.nodes_m) points->InsertNextPoint(p.data());
-    grid->SetPoints(points);
-    auto boundary = vtkSmartPointer<vtkIntArray>::New();
-    boundary->SetName("boundary_id");
-    auto material = vtkSmartPointer<vtkIntArray>::New();
-    material->SetName("material_id");
-    // Regions: material id r + 1 (as the .msh's volume groups), boundary id r (NAME_outer).
-    const bool regions = !mesh.region_names.empty();
-    for (std::size_t k = 0; k < mesh.tetrahedra.size(); ++k) {
-      const auto& t = mesh.tetrahedra[k];
-      const vtkIdType v[4] = {t[0], t[1], t[2], t[3]};
-      grid->InsertNextCell(VTK_TETRA, 4, v);
-      boundary->InsertNextValue(-1), material->InsertNextValue(regions ? mesh.region[k] + 1 : 0);
-    }
-    for (std::size_t k = 0; k < mesh.boundary.size(); ++k) {
-      const auto& t = mesh.boundary[k];
-      const vtkIdType v[3] = {t[0], t[1], t[2]};
-      grid->InsertNextCell(VTK_TRIANGLE, 3, v);
-      boundary->InsertNextValue(regions ? mesh.boundary_region[k] : 0), material->InsertNextValue(-1);
-    }
-    // Interfaces: boundary ids after the outer surfaces', in interface_groups' order (inner faces:
-    // the solver reads them as names only).
-    const auto interfaces = interface_ids(mesh);
-    for (std::size_t k = 0; k < mesh.interfaces.size(); ++k) {
-      const auto& t = mesh.interfaces[k];
-      const vtkIdType v[3] = {t[0], t[1], t[2]};
-      grid->InsertNextCell(VTK_TRIANGLE, 3, v);
-      boundary->InsertNextValue(static_cast<int>(mesh.region_names.size()) + interfaces[k]), material->InsertNextValue(-1);
-    }
-    grid->GetCellData()->AddArray(boundary);
-    grid->GetCellData()->AddArray(material);
-    auto names = vtkSmartPointer<vtkStringArray>::New();
-    names->SetName("boundary_names");
-    if (!regions) names->InsertNextValue("surface");
-    for (const auto& region : mesh.region_names) names->InsertNextValue(region + "_outer");
-    for (const auto& [name, faces] : interface_groups(mesh)) names->InsertNextValue(name);
-    grid->GetFieldData()->AddArray(names);
-    if (regions) {  // entry i names material id i (0 unused)
-      auto region_names = vtkSmartPointer<vtkStringArray>::New();
-      region_names->SetName("region_names");
-      region_names->InsertNextValue("");
-      for (const auto& region : mesh.region_names) region_names->InsertNextValue(region);
-      grid->GetFieldData()->AddArray(region_names);
-    }
-    auto writer = vtkSmartPointer<vtkXMLUnstructuredGridWriter>::New();
-    writer->SetFileName(name.c_str());
-    writer->SetInputData(grid);
-    if (!writer->Write()) throw std::runtime_error(name + ": could not be written");
-    return;
-  }
-  if (e != ".msh") throw std::runtime_error(name + ": meshes are written as .msh or .vtu");
-  GmshSession session;
-  gmsh::model::add("tissue");
-  // One discrete volume per region (tag r + 1) and its outer surface (tag r + 1); one of each, named
-  // `tissue` and `surface`, without regions.
-  const bool regions = !mesh.region_names.empty();
-  const int n = regions ? static_cast<int>(mesh.region_names.size()) : 1;
-  for (int r = 1; r <= n; ++r) {
-    gmsh::model::addDiscreteEntity(2, r);
-    gmsh::model::addDiscreteEntity(3, r, {r});
-  }
-  std::vector<std::size_t> tags(mesh.nodes_m.size());
-  std::vector<double> xyz;
-  for (std::size_t i = 0; i < tags.size(); ++i) {
-    tags[i] = i + 1;
-    xyz.insert(xyz.end(), mesh.nodes_m[i].begin(), mesh.nodes_m[i].end());
-  }
-  gmsh::model::mesh::addNodes(3, 1, tags, xyz);
-  std::vector<std::vector<std::size_t>> tri(static_cast<std::size_t>(n)), tet(static_cast<std::size_t>(n));
-  for (std::size_t k = 0; k < mesh.boundary.size(); ++k)
-    for (int v : mesh.boundary[k]) tri[regions ? std::size_t(mesh.boundary_region[k]) : 0].push_back(std::size_t(v) + 1);
-  for (std::size_t k = 0; k < mesh.tetrahedra.size(); ++k)
-    for (int v : mesh.tetrahedra[k]) tet[regions ? std::size_t(mesh.region[k]) : 0].push_back(std::size_t(v) + 1);
-  for (int r = 1; r <= n; ++r) {
-    gmsh::model::mesh::addElementsByType(r, 2, {}, tri[std::size_t(r - 1)]);
-    gmsh::model::mesh::addElementsByType(r, 4, {}, tet[std::size_t(r - 1)]);
-    const std::string group = regions ? mesh.region_names[std::size_t(r - 1)] : "tissue";
-    // Volume groups 1..n are the regions (material ids); surface groups 1..n their outer surfaces.
-    gmsh::model::setPhysicalName(2, gmsh::model::addPhysicalGroup(2, {r}, regions ? r : 1), regions ? group + "_outer" : "surface");
-    gmsh::model::setPhysicalName(3, gmsh::model::addPhysicalGroup(3, {r}, regions ? r : 2), group);
-  }
-  // Interfaces: one discrete surface and group each, tags n + 1, n + 2, ... (bounding no volume).
-  if (regions) {
-    const auto groups = interface_groups(mesh);
-    const auto ids = interface_ids(mesh);
-    std::vector<std::vector<std::size_t>> faces(groups.size());
-    for (std::size_t k = 0; k < mesh.interfaces.size(); ++k)
-      for (int v : mesh.interfaces[k]) faces[std::size_t(ids[k])].push_back(std::size_t(v) + 1);
-    for (std::size_t g = 0; g < groups.size(); ++g) {
-      const int tag = n + 1 + static_cast<int>(g);
-      gmsh::model::addDiscreteEntity(2, tag);
-      gmsh::model::mesh::addElementsByType(tag, 2, {}, faces[g]);
-      gmsh::model::setPhysicalName(2, gmsh::model::addPhysicalGroup(2, {tag}, tag), groups[g].first);
-    }
-  }
-  if (partitions > 1) gmsh::model::mesh::partition(partitions);
-  gmsh::option::setNumber("Mesh.MshFileVersion", 4.1);
-  try {
-    gmsh::write(name);
-  } catch (const std::exception&) {
-    throw std::runtime_error(name + ": could not be written");
-  }
-  if (!std::filesystem::exists(path)) throw std::runtime_error(name + ": could not be written");
+  VolumeMesh mesh = fill_surface(surface, s, VolumeMesh{}, {FillPath::remeshed_hxt, FillPath::surface_hxt}, "");
+  report(s, "done", 1.0);
+  return mesh;
 }
 
 }  // namespace fetouch::meshes

@@ -17,6 +17,7 @@
 #include <filesystem>
 #include <functional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "meshes/tet_repair.h"
@@ -35,6 +36,9 @@ struct MeshingSettings {
   double element_size_mm = 4;
   int smoothing_iterations = 20;
   int partitions = 0;  // > 1: METIS partitions (Gmsh)
+  // The smallest dihedral angle asked of the mesh: the paths of meshes/gmsh_fill.h are tried until
+  // one reaches it (VolumeMesh::quality_met says whether one did).
+  double min_dihedral_deg = 10;
   // Refinement: elements of refine_size_mm within refine_radius_mm of refine_center_mm, grading to
   // element_size_mm over one more radius (none when the radius is 0).
   std::array<double, 3> refine_center_mm{0, 0, 0};
@@ -52,8 +56,18 @@ struct VolumeMesh {
   double segmented_volume_m3 = 0;  // voxels x voxel volume
   long surface_triangles = 0;
   bool closed_manifold = false;
+  bool decimation_skipped = false;  // quadric decimation broke the surface: kept as extracted
   bool surface_remeshed = false;  // Gmsh parametrised and remeshed the surface (else kept as decimated)
   SliverRepair repair;            // what the sliver repair did after Gmsh
+  // How the mesh was made: the path taken (meshes/gmsh_fill.h's describe), each path tried with its
+  // outcome, whether the smallest dihedral angle reached MeshingSettings::min_dihedral_deg, and the
+  // seconds of each phase ("surface", "volume mesh", "optimisation": Gmsh's optimisers and the
+  // sliver repair of the mesh kept).
+  std::string path;
+  std::vector<std::string> attempts;
+  bool quality_met = false;
+  std::vector<std::pair<std::string, double>> phases;
+  double optimisation_seconds = 0;
   // Regions (mesh_regions.h; empty: one region, `tissue`): names, each tetrahedron's index into
   // them, and per region its elements, volume against its voxels', quality and outer surface.
   struct RegionReport {

@@ -9,6 +9,7 @@
 #include <filesystem>
 #include <iostream>
 #include <memory>
+#include <optional>
 #include <sstream>
 
 #include "app/commands/commands.h"
@@ -35,15 +36,22 @@ struct MeshOptions {
   std::vector<int> labels;        // label map: these labels are the tissue
   std::vector<std::string> regions;  // label map: NAME=L1,L2 ... (their union is the tissue)
   bool fetus = false;             // the fetal segmentation pipeline
-  float threshold = -1;           // intensity threshold (default: halfway between the 5th and 95th percentiles)
+  std::optional<float> threshold;  // intensity threshold, in the image's units
+  std::optional<double> threshold_percentile;  // or a percentile of the smoothed volume
+  // (default: halfway between the 5th and 95th percentiles)
   std::string smoothing = "gaussian";
   double smoothing_mm = 1.0;
   int closing = 2;
   double size_mm = 3;
+  double min_dihedral_deg = 10;
   int partitions = 0;
   std::vector<double> refine;     // X Y Z RADIUS SIZE, mm
   bool json = false;
 };
+
+double seconds_since(std::chrono::steady_clock::time_point start) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
 
 int run_mesh(const MeshOptions& o) {
   const auto start = std::chrono::steady_clock::now();
@@ -69,19 +77,30 @@ int run_mesh(const MeshOptions& o) {
     std::cerr << "error: --regions takes the labels of a label map itself; drop --labels and --fetus\n";
     return kExitBadInput;
   }
+  if (o.threshold && o.threshold_percentile) {
+    std::cerr << "error: give --threshold or --threshold-percentile, not both\n";
+    return kExitBadInput;
+  }
+  std::vector<std::pair<std::string, double>> phases;
+  float threshold_used = 0;
+  bool thresholded = false;
   try {
     log::info() << "reading " << o.volume;
     const imaging::Volume<float> volume = imaging::read_volume(o.volume);
+    phases.push_back({"reading", seconds_since(start)});
     if (!regions.empty()) labels_in_regions = label_map(volume);  // the label map itself
     log::info() << "segmenting";
     imaging::TissueSegmentation segmentation;
     segmentation.labels = labels, segmentation.fetus = o.fetus, segmentation.smoothing_mm = o.smoothing_mm;
     segmentation.closing = o.closing;
-    if (o.threshold >= 0) segmentation.threshold = o.threshold;
+    segmentation.threshold = o.threshold, segmentation.threshold_percentile = o.threshold_percentile;
+    thresholded = labels.empty() && !o.fetus;
     if (o.smoothing == "none") segmentation.smoothing = imaging::TissueSegmentation::Smoothing::none;
     if (o.smoothing == "median") segmentation.smoothing = imaging::TissueSegmentation::Smoothing::median;
-    const imaging::Mask m = imaging::segment_tissue(volume, segmentation);
+    const imaging::Mask m = imaging::segment_tissue(volume, segmentation, &threshold_used);
+    if (thresholded) log::info() << "threshold " << threshold_used;
     mask = mask_volume(m);
+    phases.push_back({"segmentation", seconds_since(start) - phases.back().second});
   } catch (const std::exception& e) {
     std::cerr << "error: " << naming(o.volume, e.what()) << "\n";
     return kExitBadInput;
@@ -91,6 +110,7 @@ int run_mesh(const MeshOptions& o) {
     meshes::MeshingSettings settings;
     settings.element_size_mm = o.size_mm;
     settings.partitions = o.partitions;
+    settings.min_dihedral_deg = o.min_dihedral_deg;
     if (!o.refine.empty()) {
       settings.refine_center_mm = {o.refine[0], o.refine[1], o.refine[2]};
       settings.refine_radius_mm = o.refine[3], settings.refine_size_mm = o.refine[4];
@@ -102,6 +122,7 @@ int run_mesh(const MeshOptions& o) {
     mesh = meshes::mesh_mask(mask, settings);
     if (!regions.empty()) meshes::assign_regions(mesh, labels_in_regions, regions);
     progress.finish();
+    phases.insert(phases.end(), mesh.phases.begin(), mesh.phases.end());
   } catch (const std::exception& e) {
     std::cerr << "error: " << o.volume << ": " << e.what() << "\n";
     return kExitBadInput;
@@ -109,6 +130,26 @@ int run_mesh(const MeshOptions& o) {
   fs::path msh = out, vtu = out;
   msh.replace_extension(".msh");
   vtu.replace_extension(".vtu");
+  if (!mesh.quality_met) {
+    // Not written where a good mesh is expected (nor over one): beside it, to look at.
+    fs::path rejected = out;
+    rejected.replace_extension(".rejected.vtu");
+    try {
+      if (out.has_parent_path()) fs::create_directories(out.parent_path());
+      replace_when_written(rejected, [&](const fs::path& to) { meshes::write_volume_mesh(mesh, to); });
+    } catch (const std::exception& e) {
+      std::cerr << "error: " << e.what() << "\n";
+    }
+    std::string tried;
+    for (const auto& a : mesh.attempts) tried += "\n  " + a;
+    std::fprintf(stderr,
+                 "error: %s: no mesh reached the smallest dihedral angle asked, %.1f deg (the best, %.1f deg, by %s, is written "
+                 "as %s to look at; a smaller --size or a smoother segmentation usually helps). Paths tried:%s\n",
+                 o.volume.c_str(), o.min_dihedral_deg, mesh.quality.min_dihedral_deg, mesh.path.c_str(),
+                 rejected.string().c_str(), tried.c_str());
+    return kExitFailure;
+  }
+  const auto writing = std::chrono::steady_clock::now();
   try {
     if (out.has_parent_path()) fs::create_directories(out.parent_path());
     replace_when_written(msh, [&](const fs::path& to) { meshes::write_volume_mesh(mesh, to, o.partitions); });
@@ -117,7 +158,8 @@ int run_mesh(const MeshOptions& o) {
     std::cerr << "error: " << e.what() << "\n";
     return kExitFailure;
   }
-  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  phases.push_back({"writing", seconds_since(writing)});
+  const double seconds = seconds_since(start);
   const auto& q = mesh.quality;
   const double volume_error = mesh.volume_m3 / mesh.segmented_volume_m3 - 1;
   std::ostringstream text;
@@ -155,6 +197,15 @@ int run_mesh(const MeshOptions& o) {
   json.key("relocated").value(mesh.repair.relocated);
   json.end_object();
   json.key("surface_remeshed").value(mesh.surface_remeshed);
+  json.key("path").value(mesh.path);
+  json.key("paths_tried").begin_array();
+  for (const auto& a : mesh.attempts) json.value(a);
+  json.end_array();
+  json.key("min_dihedral_asked_deg").value(o.min_dihedral_deg);
+  if (thresholded) json.key("threshold").value(static_cast<double>(threshold_used));
+  json.key("phases_seconds").begin_object();
+  for (const auto& [phase, t] : phases) json.key(phase).value(t);
+  json.end_object();
   json.key("regions").begin_array();
   for (const auto& r : mesh.regions) {
     json.begin_object();
@@ -197,6 +248,16 @@ int run_mesh(const MeshOptions& o) {
       std::printf("  %ld interface triangles between regions (surface groups: %s)\n", mesh.interface_triangles,
                   groups.empty() ? "none" : groups.c_str());
     }
+    std::printf("  made by: %s%s\n", mesh.path.c_str(), mesh.attempts.size() > 1 ? " (after the paths before it failed or fell short)" : "");
+    if (mesh.attempts.size() > 1)
+      for (const auto& a : mesh.attempts) std::printf("    tried %s\n", a.c_str());
+    std::string timing;
+    for (const auto& [phase, t] : phases) {
+      char part[64];
+      std::snprintf(part, sizeof part, "%s%s %.1f s", timing.empty() ? "" : ", ", phase.c_str(), t);
+      timing += part;
+    }
+    std::printf("  time: %s\n", timing.c_str());
     std::printf("  wrote %s and %s (open the .vtu in ParaView)\n", msh.string().c_str(), vtu.string().c_str());
   }
   if (std::abs(volume_error) > 0.03)
@@ -213,30 +274,47 @@ void add_mesh_command(CLI::App& parent, int& exit_code) {
   cmd->footer(
       "Segments the volume (a label map with --labels, the fetal pipeline with --fetus, otherwise a\n"
       "threshold after smoothing: the largest region, closed and hole-filled), extracts and cleans its\n"
-      "surface (flying edges, non-shrinking smoothing, decimation), fills it with tetrahedra by Gmsh at\n"
-      "--size, optimises them and reports their quality. Writes MESH.msh (4.1; physical groups\n"
-      "`surface` and `tissue`) and MESH.vtu, in metres. Exit 0 when no element is inverted or\n"
-      "degenerate and the boundary is closed and manifold.\n"
+      "surface on a grid of a third of --size (flying edges, non-shrinking smoothing, decimation), fills\n"
+      "it with tetrahedra by Gmsh at --size, optimises them and reports their quality and each phase's\n"
+      "time. Gmsh's paths are tried in turn (the surface remeshed + HXT, the surface as it is + HXT,\n"
+      "the surface as it is + Delaunay) until one gives a valid mesh whose smallest dihedral angle\n"
+      "reaches --min-dihedral; the report names the path. Writes MESH.msh (4.1; physical groups\n"
+      "`surface` and `tissue`) and MESH.vtu, in metres. Exit 0 with a closed, manifold boundary, no\n"
+      "inverted or degenerate element and the angle reached; exit 1 when no path reached the angle (the\n"
+      "best mesh written as MESH.rejected.vtu, MESH.msh and MESH.vtu untouched); exit 2 when the input\n"
+      "cannot be meshed at all (the reason, and where Gmsh names one, the place in mm).\n"
       "With --regions, one mesh of the regions' union whose elements each take the region covering most\n"
       "of them (the regions share their interfaces node for node; an interface follows element faces),\n"
       "volume groups named as given, surface groups NAME_outer and one per interface, A_B (the\n"
       "regions in the order given), and a report per region.\n"
       "Example: fetouch mesh phantom/phantom_labels.mha --labels 3 4 5 6 --size 3 --out fetus.msh\n"
       "         fetouch mesh phantom/phantom_labels.mha --regions wall=1 fluid=2 fetus=3,4,5,6 --size 4");
-  cmd->add_option("volume", o->volume, "Volume (.mha, .mhd, .vti, .nrrd)")->required()->check(CLI::ExistingFile);
+  cmd->add_option("volume", o->volume, "Volume (.mha, .mhd, .vti, .nrrd, .nii, .nii.gz, .hdr) or a folder with a DICOM series")
+      ->required()
+      ->check(CLI::ExistingPath);
   cmd->add_option("--out", o->out, "Mesh file (.msh or .vtu; both are written)")->capture_default_str();
   cmd->add_option("--labels", o->labels, "The labels that make the tissue (label maps)");
   cmd->add_option("--regions", o->regions,
                   "Regions of a label map, NAME=L1,L2 each: one conforming mesh of their union, each element in the "
                   "region covering most of it (volume groups NAME, surfaces NAME_outer and A_B per interface)");
   cmd->add_flag("--fetus", o->fetus, "Segment the fetus of a fetal ultrasound volume");
-  cmd->add_option("--threshold", o->threshold, "Intensity threshold (default: between the 5th and 95th percentiles)");
+  cmd->add_option("--threshold", o->threshold,
+                  "Intensity threshold in the image's units (Hounsfield units for a CT; default: between the 5th and 95th "
+                  "percentiles)");
+  cmd->add_option("--threshold-percentile", o->threshold_percentile,
+                  "Threshold at this percentile of the smoothed volume's intensities, 0 to 100")
+      ->check(CLI::Range(0.0, 100.0));
   cmd->add_option("--smoothing", o->smoothing, "Speckle filter before the threshold: none, gaussian or median (3x3x3)")
       ->check(CLI::IsMember({"none", "gaussian", "median"}))
       ->capture_default_str();
   cmd->add_option("--smooth", o->smoothing_mm, "Gaussian smoothing before the threshold, mm")->check(CLI::Range(0.0, 50.0))->capture_default_str();
   cmd->add_option("--close", o->closing, "Closing radius, voxels")->check(CLI::Range(0, 10))->capture_default_str();
   cmd->add_option("--size", o->size_mm, "Target element size, mm")->check(CLI::Range(0.01, 500.0))->capture_default_str();
+  cmd->add_option("--min-dihedral", o->min_dihedral_deg,
+                  "Smallest dihedral angle a written mesh may have, deg (else exit 1, the best mesh written as "
+                  "MESH.rejected.vtu)")
+      ->check(CLI::Range(1.0, 35.0))
+      ->capture_default_str();
   cmd->add_option("--refine", o->refine, "Finer elements near a point: X Y Z RADIUS SIZE (mm; grading over one more radius)")
       ->expected(5);
   cmd->add_option("--partitions", o->partitions, "METIS partitions in the .msh")->check(CLI::Range(0, 1024));

@@ -21,12 +21,14 @@
 
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 
 #include "config/scene.h"
 #include "fem/mpi_session.h"
 #include "fem/tissue_mesh_builder.h"
+#include "tests/support/nifti_file.h"
 #include "tests/support/run_command.h"
 
 namespace fetouch::testing {
@@ -176,6 +178,68 @@ TEST(MeshCommand, EmptySegmentationAndHugeMeshesAreRefused) {
                                         " --labels 2 --size 0.01 --out " + (dir / "x.msh").string()));
   EXPECT_EQ(huge.exit_code, 2);
   EXPECT_NE(huge.err.find("memory"), std::string::npos) << huge.err;
+  fs::remove_all(dir);
+}
+
+// A CT-like NIfTI (int16 stored, scl_inter -1000: Hounsfield units): a ball of 20 mm radius, +40
+// HU at its centre falling to -160 HU at its edge, in air at -1000 HU, 1 mm voxels. A negative
+// threshold in the image's units, halfway across the edge, meshes the ball (its volume against
+// 4/3 pi r^3), a percentile picks that share of the voxels, a quality bound no
+// mesh can meet is refused with the best mesh beside, and a segmentation thinner than the elements
+// is refused with the reason.
+TEST(MeshCommand, ClinicalVolumeThresholdsAndQualityBound) {
+  const fs::path dir = fs::temp_directory_path() / ("fetouch_mesh_ct_" + std::to_string(::getpid()));
+  fs::create_directories(dir);
+  NiftiFields f;
+  const int n = 64;
+  f.dim[1] = f.dim[2] = f.dim[3] = n;
+  f.datatype = 4, f.bitpix = 16, f.scl_slope = 1, f.scl_inter = -1000;
+  std::string voxels(std::size_t(n) * n * n * 2, '\0'), speck = voxels;
+  long inside = 0;
+  for (int k = 0; k < n; ++k)
+    for (int j = 0; j < n; ++j)
+      for (int i = 0; i < n; ++i) {
+        const double r = std::sqrt((i - 31.5) * (i - 31.5) + (j - 31.5) * (j - 31.5) + (k - 31.5) * (k - 31.5));
+        const std::int16_t raw = static_cast<std::int16_t>(r <= 20 ? std::lround(1040 - 10 * r) : 0);
+        inside += r <= 20;
+        std::memcpy(&voxels[2 * ((std::size_t(k) * n + j) * n + i)], &raw, 2);
+      }
+  const std::int16_t bright = 1040;
+  std::memcpy(&speck[2 * ((std::size_t(32) * n + 32) * n + 32)], &bright, 2);
+  write_nifti(dir / "ball.nii.gz", nifti_bytes(f, voxels), true);
+  write_nifti(dir / "speck.nii", nifti_bytes(f, speck), false);
+  const std::string ball = (dir / "ball.nii.gz").string();
+
+  const YAML::Node j = check_mesh(ball + " --threshold -580 --size 3", dir / "ball.msh");
+  ASSERT_TRUE(j);
+  EXPECT_DOUBLE_EQ(j["threshold"].as<double>(), -580);
+  const double sphere_m3 = 4.0 / 3 * M_PI * std::pow(0.020, 3);
+  EXPECT_NEAR(j["volume_m3"].as<double>(), sphere_m3, 0.03 * sphere_m3);
+  EXPECT_FALSE(j["path"].as<std::string>().empty());
+  for (const char* phase : {"reading", "segmentation", "surface", "volume mesh", "optimisation", "writing"})
+    EXPECT_TRUE(j["phases_seconds"][phase]) << phase;
+
+  // The 95th percentile: a threshold inside the ball (whose values all differ from shell to
+  // shell), so the 5 % brightest voxels.
+  const YAML::Node p = check_mesh(ball + " --threshold-percentile 95 --size 2", dir / "top.msh");
+  ASSERT_TRUE(p);
+  const double share = p["segmented_volume_m3"].as<double>() / (n * n * n * 1e-9);
+  std::printf("95th percentile: threshold %.1f HU, %.2f %% of the voxels (the ball is %.2f %%)\n", p["threshold"].as<double>(),
+              100 * share, 100.0 * inside / (n * n * n));
+  EXPECT_NEAR(share, 0.05, 0.005);
+
+  const fs::path strict = dir / "strict.msh";
+  const auto refused = run_command(fetouch("mesh " + ball + " --threshold -580 --size 4 --min-dihedral 35 --out " + strict.string()));
+  EXPECT_EQ(refused.exit_code, 1) << refused.err;
+  EXPECT_NE(refused.err.find("35.0 deg"), std::string::npos) << refused.err;
+  EXPECT_TRUE(fs::exists(dir / "strict.rejected.vtu"));
+  EXPECT_FALSE(fs::exists(strict));
+  EXPECT_GT(read_tetrahedra((dir / "strict.rejected.vtu").string())->GetNumberOfCells(), 100);
+
+  const auto speck_run = run_command(fetouch("mesh " + (dir / "speck.nii").string() +
+                                             " --threshold 0 --smoothing none --close 0 --size 8 --out " + (dir / "s.msh").string()));
+  EXPECT_EQ(speck_run.exit_code, 2) << speck_run.err;
+  EXPECT_NE(speck_run.err.find("thicker"), std::string::npos) << speck_run.err;
   fs::remove_all(dir);
 }
 
