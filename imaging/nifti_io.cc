@@ -18,7 +18,6 @@ namespace fetouch::imaging {
 namespace {
 
 constexpr int kHeaderBytes = 348;
-constexpr double kMaxValues = double(1u << 30);  // the memory budget every format keeps (4 GB as floats)
 
 std::string lower(std::string text) {
   std::transform(text.begin(), text.end(), text.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
@@ -217,9 +216,6 @@ VolumeInfo info_of(const std::filesystem::path& path, const Header& h) {
   info.components = 1;
   info.scalar_type = type_of(h.datatype).second;
   for (int i = 0; i < 3; ++i) info.dimensions[i] = h.dim[i + 1];
-  if (info.voxel_count() > kMaxValues)
-    throw std::runtime_error(name + ": " + std::to_string(h.dim[1]) + " x " + std::to_string(h.dim[2]) + " x " +
-                             std::to_string(h.dim[3]) + " voxels; at most 2^30 fit the memory budget (4 GB as floats)");
   auto m = voxel_to_ras(name, h);
   for (int c = 0; c < 4; ++c) m[0][c] = -m[0][c], m[1][c] = -m[1][c];  // RAS -> LPS
   for (int c = 0; c < 3; ++c) {

@@ -26,7 +26,9 @@ bool is_nifti_name(const std::filesystem::path& path);
 // value when the header is not a NIfTI-1 header or promises data the file does not hold.
 VolumeInfo read_nifti_info(const std::filesystem::path& path);
 
-// The first 3D volume, as float, scaled by scl_slope and scl_inter.
+// The first 3D volume, as float, scaled by scl_slope and scl_inter. The size bound every format
+// keeps (imaging/volume_io.cc's check_plausible, at most 2^30 voxels) is checked by read_volume
+// on read_nifti_info before this allocates.
 Volume<float> read_nifti(const std::filesystem::path& path);
 
 }  // namespace fetouch::imaging

@@ -183,10 +183,8 @@ VolumeMesh fill_surface(vtkSmartPointer<vtkPolyData> surface, const MeshingSetti
     out.attempts.push_back(surface_name + describe(path) + ": " + outcome + timing);
     const bool valid = !mesh.tetrahedra.empty() && mesh.closed_manifold && mesh.quality.inverted == 0 && mesh.quality.degenerate == 0;
     if (valid && (!have || mesh.quality.min_dihedral_deg > out.quality.min_dihedral_deg)) {
-      const auto attempts = out.attempts;
-      const auto phases = out.phases;
+      mesh.attempts = std::move(out.attempts);
       out = std::move(mesh);
-      out.attempts = attempts, out.phases = phases;
       out.path = surface_name + describe(path);
       have = true;
     }
@@ -283,11 +281,7 @@ vtkSmartPointer<vtkPolyData> mask_surface(const MaskVolume& mask, const MeshingS
     vtkSmartPointer<vtkPolyData> decimated = smoothed(decimate->GetOutput(), 10);
     // Quadric decimation does not keep the topology: on a folded surface (a brain's gyri) it
     // pinches edges into non-manifold ones. Then the surface stays as extracted (Gmsh remeshes it).
-    if (open_edges(decimated) > 0) {
-      decimated = surface;
-      out.decimation_skipped = true;
-    }
-    surface = decimated;
+    if (open_edges(decimated) == 0) surface = decimated;
   }
   // Into space: the image's index axes along its direction cosines, about its origin.
   if (mask.direction != std::array<double, 9>{1, 0, 0, 0, 1, 0, 0, 0, 1}) {
@@ -334,8 +328,9 @@ VolumeMesh mesh_mask(const MaskVolume& mask, const MeshingSettings& s) {
     try {
       surface = mask_surface(mask, s, smoother, out);
     } catch (const std::exception& e) {
-      if (!smoother || have) throw;
+      if (!smoother) throw;
       failures += std::string("; smoother surface: ") + e.what();
+      attempts.push_back(std::string("smoother surface: ") + e.what());
       break;
     }
     surface_seconds += seconds_since(phase);

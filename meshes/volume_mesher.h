@@ -56,7 +56,6 @@ struct VolumeMesh {
   double segmented_volume_m3 = 0;  // voxels x voxel volume
   long surface_triangles = 0;
   bool closed_manifold = false;
-  bool decimation_skipped = false;  // quadric decimation broke the surface: kept as extracted
   bool surface_remeshed = false;  // Gmsh parametrised and remeshed the surface (else kept as decimated)
   SliverRepair repair;            // what the sliver repair did after Gmsh
   // How the mesh was made: the path taken (meshes/gmsh_fill.h's describe), each path tried with its

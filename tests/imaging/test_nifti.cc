@@ -15,6 +15,7 @@
 
 #include "imaging/volume_info.h"
 #include "imaging/volume_io.h"
+#include "tests/support/brightest_voxel.h"
 #include "tests/support/nifti_file.h"
 
 namespace fetouch::imaging {
@@ -54,14 +55,7 @@ void expect_at(const Volume<float>& v, std::array<int, 3> voxel, std::array<doub
   for (int d = 0; d < 3; ++d) EXPECT_NEAR(p[d], expected[d], 1e-4) << what << ", axis " << d;
 }
 
-// The brightest voxel's index.
-std::array<int, 3> brightest(const Volume<float>& v) {
-  std::size_t best = 0;
-  for (std::size_t i = 0; i < v.data.size(); ++i)
-    if (v.data[i] > v.data[best]) best = i;
-  const int nx = v.dimensions[0], ny = v.dimensions[1];
-  return {static_cast<int>(best % nx), static_cast<int>(best / nx % ny), static_cast<int>(best / nx / ny)};
-}
+using testing::brightest_voxel;
 
 TEST_F(Nifti, SformPlacesTheMarkerAndFlipsRasToLps) {
   NiftiFields f = small();
@@ -75,7 +69,7 @@ TEST_F(Nifti, SformPlacesTheMarkerAndFlipsRasToLps) {
   testing::write_nifti(file, testing::nifti_bytes(f, marker_voxels()), false);
   const Volume<float> v = read_volume(file);
   ASSERT_EQ(v.dimensions, (std::array<int, 3>{6, 5, 4}));
-  EXPECT_EQ(brightest(v), (std::array<int, 3>{4, 1, 3}));
+  EXPECT_EQ(brightest_voxel(v), (std::array<int, 3>{4, 1, 3}));
   EXPECT_FLOAT_EQ(v.data[v.index(4, 1, 3)], 200);
   // RAS of (4, 1, 3): (0.5 * 3 + 10, 0.75 * 4 - 20, 1.25 * 1 + 30).
   expect_at(v, {4, 1, 3}, lps(11.5, -17, 31.25), "marker");
@@ -99,7 +93,7 @@ TEST_F(Nifti, QformWithARotationAndReversedSlices) {
   const fs::path file = dir_ / "qform.nii.gz";
   testing::write_nifti(file, testing::nifti_bytes(f, marker_voxels()), true);
   const Volume<float> v = read_volume(file);
-  EXPECT_EQ(brightest(v), (std::array<int, 3>{4, 1, 3}));
+  EXPECT_EQ(brightest_voxel(v), (std::array<int, 3>{4, 1, 3}));
   // (i dx, j dy, -k dz) = (8, 3, -12); R of it = (-3, 8, -12); plus the offset.
   expect_at(v, {4, 1, 3}, lps(2, 14, -5), "marker");
   expect_at(v, {0, 0, 0}, lps(5, 6, 7), "first voxel");

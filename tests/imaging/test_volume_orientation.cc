@@ -12,6 +12,7 @@
 
 #include "imaging/volume_info.h"
 #include "imaging/volume_io.h"
+#include "tests/support/brightest_voxel.h"
 
 namespace fetouch::imaging {
 namespace {
@@ -48,14 +49,7 @@ std::array<double, 9> rotation(double angle) {
   return r;
 }
 
-// The voxel holding the largest value.
-std::array<int, 3> brightest(const Volume<float>& v) {
-  std::size_t best = 0;
-  for (std::size_t i = 0; i < v.data.size(); ++i)
-    if (v.data[i] > v.data[best]) best = i;
-  const int nx = v.dimensions[0], ny = v.dimensions[1];
-  return {static_cast<int>(best % nx), static_cast<int>(best / nx % ny), static_cast<int>(best / nx / ny)};
-}
+using testing::brightest_voxel;
 
 TEST(Rotation, IsOrthonormalWithDeterminantOne) {
   const auto r = rotation(0.7);
@@ -81,7 +75,7 @@ TEST_F(VolumeOrientation, RoundTripsKeepTheDirection) {
     write_volume(v, dir_ / name);
     const Volume<float> back = read_volume(dir_ / name);
     for (int k = 0; k < 9; ++k) EXPECT_NEAR(back.direction[k], v.direction[k], 1e-12) << name;
-    EXPECT_EQ(brightest(back), (std::array<int, 3>{4, 1, 3})) << name;
+    EXPECT_EQ(brightest_voxel(back), (std::array<int, 3>{4, 1, 3})) << name;
     // Its place in space: origin + R (i dx, j dy, k dz), computed here from the rotation.
     const double step[3] = {4 * 0.5, 1 * 0.75, 3 * 1.25};
     const auto p = back.position_mm(4, 1, 3);
@@ -209,7 +203,7 @@ TEST_F(VolumeOrientation, DicomSeriesLandsWhereItsHeadersSay) {
   }
   const Volume<float> v = read_volume(series);
   ASSERT_EQ(v.dimensions, (std::array<int, 3>{columns, rows, 3}));
-  const auto at = brightest(v);
+  const auto at = brightest_voxel(v);
   const auto p = v.position_mm(at[0], at[1], at[2]);
   // Pixel (row r, column c) of the slice at P lies at P + c dc row_dir + r dr column_dir, with the
   // column spacing dc = 0.75 and the row spacing dr = 0.5 (PixelSpacing lists rows first).
