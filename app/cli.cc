@@ -74,6 +74,7 @@ int run_cli(int argc, char** argv) {
   add_replay_command(app, exit_code);
   add_run_command(app, exit_code);
   add_devices_command(app, exit_code);
+  add_trainer_command(app, exit_code);
   add_trajectory_command(app, exit_code);
 
   app.parse_complete_callback([&]() {

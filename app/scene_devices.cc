@@ -62,7 +62,7 @@ std::unique_ptr<haptics::Device> make_device(const config::Probe& probe, const c
     }
     default:
       throw std::runtime_error("probe " + probe.name + ": the " + std::string(config::to_string(d.type)) +
-                               " device needs the trainer window (fetouch trainer), which is not built yet");
+                               " device is driven in the trainer window: fetouch trainer SCENE");
   }
 }
 

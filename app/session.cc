@@ -294,6 +294,7 @@ SessionSummary run_realtime(haptics::Environment& environment, std::vector<std::
   std::vector<DeviceSample> block(static_cast<std::size_t>(m));
   timespec deadline = origin, now{};
   double previous_start = -1;
+  double paused_s = 0;  // wall-clock time spent paused, left out of the tick starts
   haptics::ServoClock* servo = nullptr;
   for (const auto& d : devices)
     if (!servo) servo = d->servo_clock();
@@ -302,7 +303,7 @@ SessionSummary run_realtime(haptics::Environment& environment, std::vector<std::
   const auto tick = [&]() noexcept -> bool {
     if (k >= ticks) return false;
     clock_gettime(CLOCK_MONOTONIC, &now);
-    starts[k] = seconds_between(origin, now);
+    starts[k] = seconds_between(origin, now) - paused_s;
     // On a driver's clock, a tick is late when it starts more than a period after the last one.
     lateness[k] = servo ? (previous_start < 0 ? 0 : std::max(0.0, starts[k] - previous_start - period))
                         : seconds_between(deadline, now);
@@ -321,6 +322,10 @@ SessionSummary run_realtime(haptics::Environment& environment, std::vector<std::
       if (monitor && d < SessionMonitor::kMaxDevices) monitor->force_n[d].store(block[d].force.norm(), std::memory_order_relaxed);
     }
     if (monitor) {
+      auto& probes = monitor->probes.back();
+      for (int d = 0; d < m && d < SessionMonitor::kMaxDevices; ++d)
+        probes[d] = {points[d], out[d].proxy, block[d].force, out[d].penetration, out[d].in_contact};
+      monitor->probes.publish();
       monitor->ticks.store(k + 1, std::memory_order_relaxed);
       monitor->late_ticks.store(tick_overruns.load(std::memory_order_relaxed), std::memory_order_relaxed);
     }
@@ -378,6 +383,12 @@ SessionSummary run_realtime(haptics::Environment& environment, std::vector<std::
       }
       do clock_gettime(CLOCK_MONOTONIC, &now);
       while (seconds_between(deadline, now) < 0);
+      if (settings.pause && settings.pause->load(std::memory_order_relaxed) &&
+          !(settings.stop && settings.stop->load(std::memory_order_relaxed)) && !stopping.load(std::memory_order_relaxed)) {
+        advance(deadline, period_ns);  // paused: this period is not a tick
+        paused_s += period;
+        continue;
+      }
       more = tick();
       advance(deadline, period_ns);
       clock_gettime(CLOCK_MONOTONIC, &now);

@@ -18,6 +18,7 @@
 // it was sent (Device::write) is what is recorded.
 #pragma once
 
+#include <array>
 #include <atomic>
 #include <filesystem>
 #include <functional>
@@ -30,6 +31,7 @@
 #include "haptics/devices.h"
 #include "haptics/environment.h"
 #include "haptics/haptic_loop.h"
+#include "haptics/lock_free.h"
 
 namespace fetouch::app {
 
@@ -39,6 +41,13 @@ struct SessionMonitor {
   static constexpr int kMaxDevices = 16;
   std::atomic<long> ticks{0}, late_ticks{0};  // late ticks as TimingSummary::tick_overruns counts them
   std::atomic<double> force_n[kMaxDevices] = {};  // the force each device was last sent (magnitude)
+  // Each device's last tick, published every tick through a lock-free triple buffer (one reader).
+  struct ProbeTick {
+    Eigen::Vector3d position = Eigen::Vector3d::Zero(), proxy = Eigen::Vector3d::Zero(), force = Eigen::Vector3d::Zero();
+    double penetration = 0;
+    bool in_contact = false;
+  };
+  haptics::TripleBuffer<std::array<ProbeTick, kMaxDevices>> probes{std::array<ProbeTick, kMaxDevices>{}};
 };
 
 struct SessionSettings {
@@ -60,6 +69,10 @@ struct SessionSettings {
   // Real time: set (by a signal handler, say) to end the session; the forces then ramp out over
   // 0.2 s. A device's fault (Device::fault) ends it the same way.
   const std::atomic<bool>* stop = nullptr;
+  // Real time, on the session's own clock: while set, no tick runs (simulated time stands still,
+  // nothing is recorded, devices are neither read nor written); the schedule resumes afresh. A
+  // stop request still ends the session. Ignored when a device's driver owns the servo clock.
+  const std::atomic<bool>* pause = nullptr;
   SessionMonitor* monitor = nullptr;  // real time: live figures (optional)
 };
 

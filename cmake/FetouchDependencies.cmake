@@ -24,7 +24,10 @@ find_package(VTK 9 REQUIRED COMPONENTS
   IOImage IOXML IOLegacy
   ImagingCore ImagingGeneral FiltersCore FiltersGeneral FiltersModeling FiltersVerdict
   ChartsCore ViewsContext2D RenderingCore RenderingOpenGL2 RenderingContextOpenGL2
-  RenderingFreeType InteractionStyle)
+  RenderingFreeType InteractionStyle GUISupportQt RenderingAnnotation FiltersSources)
+# The trainer window (app/trainer): Qt 5 widgets, and QTest for its tests; Debian's VTK Qt widget
+# (libvtk9-qt-dev) is built against Qt 5.
+find_package(Qt5 5.15 REQUIRED COMPONENTS Widgets Test)
 
 find_package(deal.II 9.4 REQUIRED HINTS ${DEAL_II_DIR} $ENV{DEAL_II_DIR})
 foreach(feature MPI PETSC METIS HDF5 GMSH)

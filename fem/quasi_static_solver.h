@@ -161,6 +161,22 @@ class QuasiStaticSolver {
   CellFields cell_fields() const;
   double max_displacement() const;  // largest nodal |u|, m
 
+  // The mesh as a viewer draws it (the trainer): the triangulation's vertices (reference
+  // positions, m), its cells as tetrahedra (a hexahedron split in six, through its 0-7 diagonal)
+  // with each one's material id, and its boundary faces as triangles (a quadrilateral split in two).
+  struct DrawingMesh {
+    std::vector<std::array<double, 3>> points;
+    std::vector<std::array<unsigned int, 4>> tetrahedra;
+    std::vector<unsigned int> tetrahedron_cell;  // the cell each tetrahedron belongs to
+    std::vector<unsigned int> material;          // per tetrahedron
+    std::vector<std::array<unsigned int, 3>> boundary_triangles;
+    std::vector<unsigned int> boundary_triangle_cell;  // the cell each boundary triangle bounds
+  };
+  DrawingMesh drawing_mesh() const;
+  // The current displacement at the mesh's vertices: 3 values per DrawingMesh point (x, y, z), m.
+  // `out` is resized only when its size is not that; vertices no cell uses get 0.
+  void vertex_displacements(std::vector<float>& out) const;
+
   // The deformed state for ParaView: a VTU with the displacement (warp by vector to see the
   // deformation), J and the von Mises stress per cell. Throws std::runtime_error if unwritable.
   void write_vtu(const std::string& path) const;

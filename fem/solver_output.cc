@@ -92,6 +92,55 @@ double QuasiStaticSolver::max_displacement() const {
   return worst;
 }
 
+QuasiStaticSolver::DrawingMesh QuasiStaticSolver::drawing_mesh() const {
+  const Impl& m = *impl_;
+  DrawingMesh mesh;
+  mesh.points.reserve(m.d.tria.n_vertices());
+  for (const Point<3>& p : m.d.tria.get_vertices()) mesh.points.push_back({p[0], p[1], p[2]});
+  // deal.II's hexahedron numbers its vertices lexicographically: the six tetrahedra around the
+  // 0-7 diagonal, each through two neighbouring corners of the ring 1-3-2-6-4-5.
+  static constexpr unsigned int kRing[6] = {1, 3, 2, 6, 4, 5};
+  for (const auto& cell : m.d.tria.active_cell_iterators()) {
+    const unsigned int index = cell->active_cell_index(), id = cell->material_id();
+    if (cell->n_vertices() == 4) {
+      mesh.tetrahedra.push_back({cell->vertex_index(0), cell->vertex_index(1), cell->vertex_index(2), cell->vertex_index(3)});
+      mesh.tetrahedron_cell.push_back(index), mesh.material.push_back(id);
+    } else {
+      for (unsigned int r = 0; r < 6; ++r) {
+        mesh.tetrahedra.push_back({cell->vertex_index(0), cell->vertex_index(kRing[r]), cell->vertex_index(kRing[(r + 1) % 6]),
+                                   cell->vertex_index(7)});
+        mesh.tetrahedron_cell.push_back(index), mesh.material.push_back(id);
+      }
+    }
+    for (const unsigned int f : cell->face_indices()) {
+      if (!cell->face(f)->at_boundary()) continue;
+      const auto face = cell->face(f);
+      if (face->n_vertices() == 3) {
+        mesh.boundary_triangles.push_back({face->vertex_index(0), face->vertex_index(1), face->vertex_index(2)});
+        mesh.boundary_triangle_cell.push_back(index);
+      } else {  // a quadrilateral's vertices are numbered 0 1 / 2 3
+        mesh.boundary_triangles.push_back({face->vertex_index(0), face->vertex_index(1), face->vertex_index(3)});
+        mesh.boundary_triangles.push_back({face->vertex_index(0), face->vertex_index(3), face->vertex_index(2)});
+        mesh.boundary_triangle_cell.insert(mesh.boundary_triangle_cell.end(), 2, index);
+      }
+    }
+  }
+  return mesh;
+}
+
+void QuasiStaticSolver::vertex_displacements(std::vector<float>& out) const {
+  const Impl& m = *impl_;
+  const std::size_t size = 3 * m.d.tria.n_vertices();
+  if (out.size() != size) out.assign(size, 0.0f);
+  std::vector<types::global_dof_index> indices(m.d.fe->n_dofs_per_cell());
+  for (const auto& cell : m.d.dof.active_cell_iterators()) {
+    cell->get_dof_indices(indices);
+    for (unsigned int v = 0; v < cell->n_vertices(); ++v)
+      for (unsigned int c = 0; c < 3; ++c)
+        out[3 * cell->vertex_index(v) + c] = static_cast<float>(m.u[indices[m.d.fe->component_to_system_index(c, v)]]);
+  }
+}
+
 Tensor<1, 3> QuasiStaticSolver::displacement_at(const Point<3>& point) const {
   Vector<double> value(3);
   VectorTools::point_value(*impl_->d.mapping, impl_->d.dof, impl_->u, point, value);

@@ -202,12 +202,28 @@ Eigen::Matrix3d exponential(const Eigen::Matrix3d& m) {
   return sum;
 }
 
+void check_hand(const HandParameters& hand) {
+  if (!(hand.mass_kg > 0) || !(hand.stiffness_n_per_m > 0) || !(hand.damping_n_s_per_m >= 0))
+    throw std::invalid_argument("operator: the hand's mass and stiffness must be positive and its damping not negative");
+}
+
+// ZOH discretisation of x' = v, v' = (-k x - b v + u) / m: exp of the augmented matrix.
+void hand_transition(const HandParameters& hand, double period_s, Eigen::Matrix2d& phi, Eigen::Vector2d& gamma) {
+  Eigen::Matrix3d augmented = Eigen::Matrix3d::Zero();
+  augmented(0, 1) = 1;
+  augmented(1, 0) = -hand.stiffness_n_per_m / hand.mass_kg;
+  augmented(1, 1) = -hand.damping_n_s_per_m / hand.mass_kg;
+  augmented(1, 2) = 1 / hand.mass_kg;
+  const Eigen::Matrix3d e = exponential(augmented * period_s);
+  phi = e.topLeftCorner<2, 2>();
+  gamma = e.block<2, 1>(0, 2);
+}
+
 }  // namespace
 
 VirtualOperator::VirtualOperator(const Trajectory& trajectory, const HandParameters& hand, double period_s)
     : targets_(trajectory.resampled(period_s)), stiffness_(hand.stiffness_n_per_m), damping_(hand.damping_n_s_per_m) {
-  if (!(hand.mass_kg > 0) || !(hand.stiffness_n_per_m > 0) || !(hand.damping_n_s_per_m >= 0))
-    throw std::invalid_argument("operator: the hand's mass and stiffness must be positive and its damping not negative");
+  check_hand(hand);
   if (targets_.empty()) throw std::invalid_argument("operator: an empty trajectory");
   // The target's velocity, by central differences (one-sided at the ends).
   const std::size_t n = targets_.size();
@@ -216,15 +232,7 @@ VirtualOperator::VirtualOperator(const Trajectory& trajectory, const HandParamet
     const std::size_t a = k == 0 ? 0 : k - 1, b = k + 1 == n ? k : k + 1;
     target_velocities_[k] = (targets_[b] - targets_[a]) / (double(b - a) * period_s);
   }
-  // ZOH discretisation of x' = v, v' = (-k x - b v + u) / m: exp of the augmented matrix.
-  Eigen::Matrix3d augmented = Eigen::Matrix3d::Zero();
-  augmented(0, 1) = 1;
-  augmented(1, 0) = -hand.stiffness_n_per_m / hand.mass_kg;
-  augmented(1, 1) = -hand.damping_n_s_per_m / hand.mass_kg;
-  augmented(1, 2) = 1 / hand.mass_kg;
-  const Eigen::Matrix3d e = exponential(augmented * period_s);
-  phi_ = e.topLeftCorner<2, 2>();
-  gamma_ = e.block<2, 1>(0, 2);
+  hand_transition(hand, period_s, phi_, gamma_);
   position_ = targets_.front();
   velocity_.setZero();
 }
@@ -242,6 +250,29 @@ DeviceState VirtualOperator::read() noexcept {
     }
   }
   ++tick_;
+  DeviceState s;
+  s.position_m = position_;
+  s.velocity_m_per_s = velocity_;
+  return s;
+}
+
+CursorOperator::CursorOperator(const Eigen::Vector3d& start, const HandParameters& hand, double period_s)
+    : cursor_(start), target_(start), position_(start), stiffness_(hand.stiffness_n_per_m) {
+  check_hand(hand);
+  hand_transition(hand, period_s, phi_, gamma_);
+}
+
+DeviceState CursorOperator::read() noexcept {
+  if (cursor_.take()) target_ = cursor_.front();
+  // Over the last tick: the cursor (still, as far as the hand knows: no damping on its motion) and
+  // the force rendered, held.
+  const Eigen::Vector3d force = force_.allFinite() ? force_ : Eigen::Vector3d::Zero();
+  const Eigen::Vector3d u = stiffness_ * target_ + force;
+  for (int d = 0; d < 3; ++d) {
+    const double x = phi_(0, 0) * position_[d] + phi_(0, 1) * velocity_[d] + gamma_[0] * u[d];
+    const double v = phi_(1, 0) * position_[d] + phi_(1, 1) * velocity_[d] + gamma_[1] * u[d];
+    position_[d] = x, velocity_[d] = v;
+  }
   DeviceState s;
   s.position_m = position_;
   s.velocity_m_per_s = velocity_;

@@ -19,6 +19,7 @@
 #include <vector>
 
 #include "haptics/device.h"
+#include "haptics/lock_free.h"
 
 namespace fetouch::haptics {
 
@@ -112,6 +113,35 @@ class VirtualOperator final : public Device {
   double stiffness_, damping_;
   Eigen::Vector3d position_, velocity_, force_ = Eigen::Vector3d::Zero();
   long tick_ = 0;
+};
+
+// The hand model of VirtualOperator pulled towards a target that another thread moves (the trainer's
+// mouse cursor): the probe lags the cursor by the force it meets over the hand's stiffness, which
+// is how a mouse user "feels" the tissue. The target goes through a lock-free triple buffer: one
+// writer (set_target), the haptic tick the reader. Goes on until the session is stopped.
+class CursorOperator final : public Device {
+ public:
+  // Starts at rest at `start`; throws std::invalid_argument as VirtualOperator does.
+  CursorOperator(const Eigen::Vector3d& start, const HandParameters& hand, double period_s);
+  // Any one thread (not the tick's): the cursor's new place.
+  void set_target(const Eigen::Vector3d& target) noexcept {
+    cursor_.back() = target;
+    cursor_.publish();
+  }
+  DeviceState read() noexcept override;
+  Eigen::Vector3d write(const Eigen::Vector3d& force_n) noexcept override {
+    force_ = force_n;
+    return force_n;
+  }
+  bool finished() const noexcept override { return false; }
+  long ticks() const noexcept override { return -1; }
+
+ private:
+  TripleBuffer<Eigen::Vector3d> cursor_;
+  Eigen::Vector3d target_, position_, velocity_ = Eigen::Vector3d::Zero(), force_ = Eigen::Vector3d::Zero();
+  Eigen::Matrix2d phi_;
+  Eigen::Vector2d gamma_;
+  double stiffness_;
 };
 
 }  // namespace fetouch::haptics

@@ -19,5 +19,6 @@ void add_replay_command(CLI::App& parent, int& exit_code);
 void add_trajectory_command(CLI::App& parent, int& exit_code);
 void add_run_command(CLI::App& parent, int& exit_code);
 void add_devices_command(CLI::App& parent, int& exit_code);
+void add_trainer_command(CLI::App& parent, int& exit_code);
 
 }  // namespace fetouch::app

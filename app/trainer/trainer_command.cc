@@ -1,0 +1,138 @@
+// `fetouch trainer`: the surgical trainer's window on a scene (app/trainer/trainer_window.h).
+#include <CLI/CLI.hpp>
+#include <QApplication>
+#include <QSurfaceFormat>
+#include <QVTKOpenGLNativeWidget.h>
+
+#include <cstdio>
+#include <cstdlib>
+#include <iostream>
+#include <memory>
+
+#include "app/commands/commands.h"
+#include "app/exit_codes.h"
+#include "app/json_writer.h"
+#include "app/log.h"
+#include "app/mpi_session.h"
+#include "app/scene_mesh.h"
+#include "app/trainer/trainer_window.h"
+
+namespace fetouch::app {
+
+namespace {
+
+struct TrainerCommandOptions {
+  std::string scene, trajectory, screenshot, out = "fetouch-trainer";
+  double duration_s = 0;
+  bool mouse = false, json = false;
+};
+
+int run_trainer(const TrainerCommandOptions& o) {
+  const char* display = std::getenv("DISPLAY");
+  const char* wayland = std::getenv("WAYLAND_DISPLAY");
+  if ((!display || !*display) && (!wayland || !*wayland)) {
+    std::cerr << "error: fetouch trainer opens a window and there is no display (DISPLAY is not set); "
+                 "on a machine without one run it under a virtual display: xvfb-run -a fetouch trainer ...\n";
+    return kExitBadInput;
+  }
+  std::optional<config::Scene> loaded = load_scene_or_report(o.scene);
+  if (!loaded) return kExitBadInput;
+  if (loaded->probes.empty()) {
+    std::cerr << "error: " << o.scene << ": the scene has no probes to touch the tissue with\n";
+    return kExitBadInput;
+  }
+  if (!o.screenshot.empty() && o.duration_s <= 0) {
+    std::cerr << "error: --screenshot needs --duration: the screenshot is taken when the session ends\n";
+    return kExitBadInput;
+  }
+  ensure_mpi();
+  QSurfaceFormat::setDefaultFormat(QVTKOpenGLNativeWidget::defaultFormat());
+  static int argc = 1;
+  static char name[] = "fetouch";
+  static char* argv[] = {name, nullptr};
+  QApplication application(argc, argv);
+  trainer::TrainerOptions session;
+  if (!o.trajectory.empty()) session.trajectory = o.trajectory;
+  session.mouse = o.mouse;
+  session.duration_s = o.duration_s;
+  trainer::WindowOptions window;
+  window.out = o.out;
+  if (!o.screenshot.empty()) window.screenshot = o.screenshot;
+  window.headless = o.duration_s > 0;
+  std::unique_ptr<trainer::TrainerWindow> w;
+  try {
+    w = std::make_unique<trainer::TrainerWindow>(*loaded, session, window);
+  } catch (const std::exception& e) {
+    std::cerr << "error: " << o.scene << ": " << e.what() << "\n";
+    return kExitBadInput;
+  }
+  if (!w->session()) {
+    std::cerr << "error: " << o.scene << ": " << w->figures().error << "\n";
+    return kExitBadInput;
+  }
+  w->show();
+  application.exec();
+  const trainer::WindowFigures& f = w->figures();
+  const SessionSummary s = w->session() ? w->session()->summary() : SessionSummary{};
+  if (!f.error.empty()) {
+    std::cerr << "error: " << o.scene << ": " << f.error << "\n";
+    return kExitFailure;
+  }
+  const double image_ms = f.ultrasound_images > 0 ? 1e3 * f.ultrasound_seconds / f.ultrasound_images : 0;
+  if (o.json) {
+    JsonWriter json(std::cout);
+    json.begin_object();
+    json.key("scene").value(loaded->name);
+    json.key("ticks").value(s.ticks);
+    json.key("frames").value(s.frames);
+    json.key("solve_p99_s").value(s.solve_p99_s);
+    json.key("max_force_n").value(s.max_force_n);
+    json.key("tick_lateness_p99_s").value(s.timing.lateness_p99_s);
+    json.key("tick_lateness_max_s").value(s.timing.lateness_max_s);
+    json.key("late_ticks").value(s.timing.tick_overruns);
+    json.key("frame_overruns").value(s.timing.frame_overruns);
+    json.key("skipped_frames").value(s.timing.skipped_frames);
+    json.key("ultrasound_images").value(f.ultrasound_images);
+    json.key("ultrasound_image_ms").value(image_ms);
+    json.key("renders").value(f.renders);
+    json.key("wall_s").value(f.wall_s);
+    json.key("screenshot").value(o.screenshot);
+    json.end_object();
+    std::cout << "\n";
+  } else {
+    std::printf("%ld ticks, %ld frames; solve p99 %.1f ms; tick lateness p99 %.1f us, max %.1f us, %ld late ticks; "
+                "%ld frame overruns, %ld skipped\n",
+                s.ticks, s.frames, 1e3 * s.solve_p99_s, 1e6 * s.timing.lateness_p99_s, 1e6 * s.timing.lateness_max_s,
+                s.timing.tick_overruns, s.timing.frame_overruns, s.timing.skipped_frames);
+    std::printf("  ultrasound: %ld images of 256 x 256, %.1f ms each; %ld renders\n", f.ultrasound_images, image_ms, f.renders);
+    if (!o.screenshot.empty()) std::printf("  wrote %s\n", o.screenshot.c_str());
+  }
+  return kExitOk;
+}
+
+}  // namespace
+
+void add_trainer_command(CLI::App& parent, int& exit_code) {
+  auto o = std::make_shared<TrainerCommandOptions>();
+  CLI::App* cmd = parent.add_subcommand("trainer", "The trainer window: touch the tissue, see it deform and its ultrasound");
+  cmd->footer(
+      "Runs the scene's real-time session in a window: the deformed tissue (3D), the ultrasound image\n"
+      "in the first probe's plane through the deformed tissue, force and frame-time plots, and a status\n"
+      "line. Probes with a trajectory play it; `type: mouse` probes (or the first, with --mouse) follow\n"
+      "the mouse: shift+move moves the cursor in the view plane, shift+wheel or [ and ] push it along\n"
+      "the view; the probe follows through a spring, so its lag is the force. Keys: space pause, R\n"
+      "reset, ctrl+R record a take (DIR/take-N.h5, replayable with `fetouch replay --trajectory`),\n"
+      "ctrl+S screenshot, C colour field, O image plane, V camera. With --duration it runs that long,\n"
+      "writes --screenshot and exits (docs, tests, bug reports). Needs a display: xvfb-run -a.");
+  cmd->add_option("scene", o->scene, "Scene file (.yaml)")->required()->check(CLI::ExistingFile);
+  cmd->add_option("--trajectory", o->trajectory, "The first probe's trajectory instead of the scene's (CSV t,x,y,z or a recording .h5)")
+      ->check(CLI::ExistingFile);
+  cmd->add_flag("--mouse", o->mouse, "The mouse drives the first probe");
+  cmd->add_option("--duration", o->duration_s, "Run this long (s), then write --screenshot and exit")->check(CLI::Range(0.0, 3600.0));
+  cmd->add_option("--screenshot", o->screenshot, "PNG written when the session ends (with --duration)");
+  cmd->add_option("--out", o->out, "Folder for takes and screenshots")->capture_default_str();
+  cmd->add_flag("--json", o->json, "Print the summary as JSON on stdout");
+  cmd->callback([o, &exit_code]() { exit_code = run_trainer(*o); });
+}
+
+}  // namespace fetouch::app

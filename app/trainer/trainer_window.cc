@@ -1,0 +1,332 @@
+#include "app/trainer/trainer_window.h"
+
+#include <QAction>
+#include <QApplication>
+#include <QHBoxLayout>
+#include <QImage>
+#include <QKeyEvent>
+#include <QLabel>
+#include <QMouseEvent>
+#include <QPixmap>
+#include <QSplitter>
+#include <QStatusBar>
+#include <QTimer>
+#include <QToolBar>
+#include <QVBoxLayout>
+#include <QVTKOpenGLNativeWidget.h>
+#include <QWheelEvent>
+#include <vtkCamera.h>
+#include <vtkGenericOpenGLRenderWindow.h>
+#include <vtkRenderer.h>
+
+#include <cmath>
+#include <sstream>
+
+#include "app/trainer/trace_plot.h"
+#include "app/trainer/ultrasound_volume.h"
+#include "haptics/local_model.h"
+
+namespace fetouch::app::trainer {
+
+namespace {
+
+constexpr int kImageSize = 256;
+constexpr double kImageWidthM = 0.12, kImageDepthM = 0.10;
+
+double seconds_since(std::chrono::steady_clock::time_point t) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
+}
+
+}  // namespace
+
+TrainerWindow::TrainerWindow(const config::Scene& scene, const TrainerOptions& session, const WindowOptions& window)
+    : scene_(scene), session_options_(session), window_options_(window) {
+  setWindowTitle(QString::fromStdString("Fetouch trainer: " + scene.name));
+  volume_ = scene_ultrasound(scene_, gain_, volume_description_);
+
+  vtk_widget_ = new QVTKOpenGLNativeWidget(this);
+  auto render_window = vtkSmartPointer<vtkGenericOpenGLRenderWindow>::New();
+  vtk_widget_->setRenderWindow(render_window);
+  render_window_ = render_window;
+  auto renderer = vtkSmartPointer<vtkRenderer>::New();
+  render_window_->AddRenderer(renderer);
+  renderer_ = renderer;
+  vtk_widget_->installEventFilter(this);
+  vtk_widget_->setMinimumSize(560, 480);
+
+  ultrasound_ = new QLabel(this);
+  ultrasound_->setMinimumSize(kImageSize + 128, kImageSize + 128);
+  ultrasound_->setAlignment(Qt::AlignCenter);
+  ultrasound_->setStyleSheet("background: black");
+  ultrasound_->setToolTip(QString::fromStdString("Ultrasound: " + volume_description_));
+  force_plot_ = new TracePlot("force per probe (last 5 s)", "N", 5.0, this);
+  frame_plot_ = new TracePlot("solver frame time (last 5 s)", "ms", 5.0, this);
+  frame_plot_->set_series(1);
+  auto* side = new QWidget(this);
+  auto* column = new QVBoxLayout(side);
+  column->addWidget(ultrasound_, 3);
+  column->addWidget(force_plot_, 1);
+  column->addWidget(frame_plot_, 1);
+  auto* split = new QSplitter(this);
+  split->addWidget(vtk_widget_);
+  split->addWidget(side);
+  split->setStretchFactor(0, 3), split->setStretchFactor(1, 2);
+  setCentralWidget(split);
+  status_ = new QLabel(this);
+  message_ = new QLabel(this);
+  statusBar()->addWidget(status_, 1);
+  statusBar()->addPermanentWidget(message_);
+
+  QToolBar* bar = addToolBar("controls");
+  const auto action = [this, bar](const QString& text, const QKeySequence& key, auto&& f) {
+    QAction* a = bar->addAction(text + " (" + key.toString() + ")");
+    a->setShortcut(key);
+    connect(a, &QAction::triggered, this, f);
+  };
+  action("Pause", QKeySequence(Qt::Key_Space), [this] { toggle_pause(); });
+  action("Reset", QKeySequence(Qt::Key_R), [this] { reset(); });
+  action("Record", QKeySequence(Qt::CTRL | Qt::Key_R), [this] { toggle_recording(); });
+  action("Screenshot", QKeySequence(Qt::CTRL | Qt::Key_S), [this] {
+    const auto file = window_options_.out / ("screenshot-" + std::to_string(++screenshots_) + ".png");
+    message_->setText(save_screenshot(file) ? QString::fromStdString("wrote " + file.string()) : "could not write the screenshot");
+  });
+  action("Colour", QKeySequence(Qt::Key_C), [this] { toggle_colour_field(); });
+  action("Plane", QKeySequence(Qt::Key_O), [this] { toggle_plane(); });
+  action("Camera", QKeySequence(Qt::Key_V), [this] { reset_camera(); });
+  action("Quit", QKeySequence(Qt::CTRL | Qt::Key_Q), [this] { close(); });
+
+  resize(1280, 800);
+  start_take(std::nullopt);
+  timer_ = new QTimer(this);
+  connect(timer_, &QTimer::timeout, this, [this] { tick(); });
+  timer_->start(30);
+  started_ = rate_from_ = std::chrono::steady_clock::now();
+}
+
+TrainerWindow::~TrainerWindow() {
+  if (timer_) timer_->stop();
+  view_.reset();
+  session_.reset();  // stops and joins the session's thread
+}
+
+void TrainerWindow::start_take(const std::optional<std::filesystem::path>& recording) {
+  if (session_) session_->request_stop();
+  session_.reset();
+  view_.reset();
+  if (renderer_) renderer_->RemoveAllViewProps();
+  TrainerOptions options = session_options_;
+  options.recording = recording;
+  recording_ = recording;
+  std::vector<std::string> messages;
+  QApplication::setOverrideCursor(Qt::WaitCursor);
+  try {
+    session_ = std::make_unique<TrainerSession>(scene_, options, messages);
+  } catch (const std::exception& e) {
+    QApplication::restoreOverrideCursor();
+    figures_.error = e.what();
+    message_->setText(QString::fromStdString("error: " + figures_.error));
+    return;
+  }
+  QApplication::restoreOverrideCursor();
+  std::vector<double> radii;
+  for (const auto& p : session_->scene().probes) radii.push_back(p.radius_m);
+  view_ = std::make_unique<TissueView>(renderer_, session_->mesh(), radii);
+  slicer_ = std::make_unique<DeformedSlicer>(session_->mesh().points, session_->mesh().tetrahedra, session_->mesh().material);
+  force_plot_->set_series(static_cast<int>(radii.size()));
+  force_plot_->clear();
+  frame_plot_->clear();
+  frame_plot_->set_limit(1e3 * session_->solver_period_s(), "budget");
+  last_frame_ = -2, frames_seen_ = 0, overruns_ = 0;
+  session_->want_stress(field_ == ColourField::von_mises);
+  if (session_->take_snapshot()) shown_ = session_->snapshot();
+  if (session_->cursor()) {
+    cursor_ = shown_.patch_centre.empty() ? Eigen::Vector3d::Zero()
+                                          : Eigen::Vector3d(shown_.patch_centre[session_->cursor_probe()] +
+                                                            0.01 * shown_.patch_normal[session_->cursor_probe()]);
+    session_->cursor()->set_target(cursor_);
+  }
+  view_->update_tissue(shown_, field_);
+  view_->show_cursor(session_->cursor() != nullptr, cursor_);
+  reset_camera();
+  std::string text;
+  for (const auto& m : messages) text += m + "  ";
+  if (recording) text += "recording to " + recording->string();
+  message_->setText(QString::fromStdString(text));
+  ++takes_;
+  session_->start();
+}
+
+void TrainerWindow::tick() {
+  if (!session_) {
+    if (window_options_.headless) close();
+    return;
+  }
+  bool changed = false;
+  if (session_->take_snapshot()) {
+    shown_ = session_->snapshot();
+    view_->update_tissue(shown_, field_);
+    changed = true;
+    if (shown_.frame != last_frame_) {
+      ++frames_seen_;
+      if (shown_.solve_s > session_->solver_period_s()) ++overruns_;
+      frame_plot_->add(0, shown_.time_s, 1e3 * shown_.solve_s);
+      last_frame_ = shown_.frame;
+    }
+  }
+  SessionMonitor& monitor = session_->monitor();
+  const int probes = static_cast<int>(session_->probe_names().size());
+  if (monitor.probes.take()) {
+    const auto& p = monitor.probes.front();
+    view_->update_probes(p, probes);
+    const double t = monitor.ticks.load() * session_->loop().period_s;
+    for (int i = 0; i < probes && i < SessionMonitor::kMaxDevices; ++i) force_plot_->add(i, t, p[i].force.norm());
+    changed = true;
+  }
+  if (changed && !shown_.patch_centre.empty()) {
+    const int probe = std::max(0, session_->cursor_probe());
+    update_ultrasound(shown_.patch_centre[probe], shown_.patch_normal[probe]);
+  }
+  render_window_->Render();
+  ++figures_.renders;
+  force_plot_->update();
+  frame_plot_->update();
+  update_status();
+  if (!session_->running() && window_options_.headless) {
+    figures_.error = session_->error();
+    if (window_options_.screenshot && figures_.error.empty() && !save_screenshot(*window_options_.screenshot))
+      figures_.error = "cannot write the screenshot " + window_options_.screenshot->string();
+    figures_.wall_s = seconds_since(started_);
+    timer_->stop();
+    close();
+  }
+}
+
+void TrainerWindow::update_ultrasound(const Eigen::Vector3d& point, const Eigen::Vector3d& normal) {
+  const auto start = std::chrono::steady_clock::now();
+  plane_ = probe_plane(point, normal, lateral_x_ ? Eigen::Vector3d::UnitX() : Eigen::Vector3d::UnitY(), kImageWidthM,
+                       kImageDepthM, kImageSize, kImageSize);
+  slicer_->slice(shown_.displacement, plane_, volume_.empty() ? nullptr : &volume_, gain_, image_, reference_);
+  QImage picture(image_.data(), kImageSize, kImageSize, kImageSize, QImage::Format_Grayscale8);
+  const int side = std::min(ultrasound_->width(), ultrasound_->height()) - 4;
+  ultrasound_->setPixmap(QPixmap::fromImage(picture.copy()).scaled(side, side, Qt::KeepAspectRatio, Qt::SmoothTransformation));
+  figures_.ultrasound_seconds += seconds_since(start);
+  ++figures_.ultrasound_images;
+}
+
+void TrainerWindow::update_status() {
+  const double span = seconds_since(rate_from_);
+  SessionMonitor& monitor = session_->monitor();
+  if (span >= 1.0) {
+    haptic_hz_ = (monitor.ticks.load() - rate_ticks_) / span;
+    solver_hz_ = (frames_seen_ - rate_frames_) / span;
+    ultrasound_hz_ = (figures_.ultrasound_images - rate_images_) / span;
+    rate_ticks_ = monitor.ticks.load(), rate_frames_ = frames_seen_, rate_images_ = figures_.ultrasound_images;
+    rate_from_ = std::chrono::steady_clock::now();
+  }
+  const haptics::HapticLoopSettings& loop = session_->loop();
+  std::ostringstream s;
+  s.setf(std::ios::fixed);
+  s.precision(2);
+  s << (session_->paused() ? "PAUSED  " : session_->running() ? "" : "ENDED  ") << "t " << monitor.ticks.load() * loop.period_s
+    << " s   haptic " << std::lround(haptic_hz_) << " Hz   solver " << std::lround(solver_hz_) << " Hz   "
+    << haptics::to_string(loop.local_model) << " / " << haptics::to_string(loop.hold) << "   Kp " << std::lround(shown_.proportional_gain)
+    << " Ki " << std::lround(shown_.integral_gain) << "   margin " << shown_.stability_margin << "   late ticks "
+    << monitor.late_ticks.load() << "   overruns " << overruns_ << "   ultrasound " << std::lround(ultrasound_hz_) << " img/s";
+  if (session_->cursor()) s << "   mouse: shift+move, shift+wheel or [ ] to push";
+  status_->setText(QString::fromStdString(s.str()));
+}
+
+bool TrainerWindow::save_screenshot(const std::filesystem::path& file) {
+  render_window_->Render();
+  std::error_code ignored;
+  if (file.has_parent_path()) std::filesystem::create_directories(file.parent_path(), ignored);
+  return grab().save(QString::fromStdString(file.string()));
+}
+
+void TrainerWindow::toggle_pause() {
+  if (!session_) return;
+  session_->set_paused(!session_->paused());
+}
+
+void TrainerWindow::reset() { start_take(recording_); }
+
+void TrainerWindow::toggle_recording() {
+  if (recording_) {
+    start_take(std::nullopt);
+    return;
+  }
+  std::error_code ignored;
+  std::filesystem::create_directories(window_options_.out, ignored);
+  start_take(window_options_.out / ("take-" + std::to_string(takes_) + ".h5"));
+}
+
+void TrainerWindow::toggle_colour_field() {
+  field_ = field_ == ColourField::displacement ? ColourField::von_mises : ColourField::displacement;
+  if (session_) session_->want_stress(field_ == ColourField::von_mises);
+  if (view_) view_->update_tissue(shown_, field_);
+}
+
+void TrainerWindow::toggle_plane() { lateral_x_ = !lateral_x_; }
+
+void TrainerWindow::reset_camera() {
+  if (!view_) return;
+  vtkCamera* camera = renderer_->GetActiveCamera();
+  camera->SetPosition(0, -1, 0.6);  // from the front and above: the probes press from +z
+  camera->SetFocalPoint(0, 0, 0);
+  camera->SetViewUp(0, 0, 1);
+  view_->reset_camera();
+}
+
+void TrainerWindow::move_cursor_along_view(double metres) {
+  if (!session_ || !session_->cursor()) return;
+  const double* p = renderer_->GetActiveCamera()->GetDirectionOfProjection();
+  set_cursor(cursor_ + metres * Eigen::Vector3d(p[0], p[1], p[2]));
+}
+
+void TrainerWindow::set_cursor(const Eigen::Vector3d& at) {
+  if (!session_ || !session_->cursor()) return;
+  cursor_ = at;
+  session_->cursor()->set_target(cursor_);
+  view_->show_cursor(true, cursor_);
+}
+
+void TrainerWindow::set_cursor_at_display(double x, double y) {
+  if (!session_ || !session_->cursor()) return;
+  // The point under the mouse at the cursor's depth: the cursor moves in the view plane.
+  renderer_->SetWorldPoint(cursor_.x(), cursor_.y(), cursor_.z(), 1);
+  renderer_->WorldToDisplay();
+  const double depth = renderer_->GetDisplayPoint()[2];
+  const double ratio = vtk_widget_->devicePixelRatioF();
+  renderer_->SetDisplayPoint(x * ratio, (vtk_widget_->height() - y) * ratio, depth);
+  renderer_->DisplayToWorld();
+  const double* w = renderer_->GetWorldPoint();
+  if (w[3] == 0) return;
+  set_cursor(Eigen::Vector3d(w[0] / w[3], w[1] / w[3], w[2] / w[3]));
+}
+
+bool TrainerWindow::eventFilter(QObject* watched, QEvent* event) {
+  if (watched == vtk_widget_ && session_ && session_->cursor()) {
+    if (event->type() == QEvent::MouseMove) {
+      auto* e = static_cast<QMouseEvent*>(event);
+      if (e->modifiers() & Qt::ShiftModifier) {
+        set_cursor_at_display(e->localPos().x(), e->localPos().y());
+        return true;
+      }
+    } else if (event->type() == QEvent::Wheel) {
+      auto* e = static_cast<QWheelEvent*>(event);
+      if (e->modifiers() & Qt::ShiftModifier) {
+        move_cursor_along_view(e->angleDelta().y() > 0 ? 1e-3 : -1e-3);
+        return true;
+      }
+    } else if (event->type() == QEvent::KeyPress) {
+      auto* e = static_cast<QKeyEvent*>(event);
+      if (e->key() == Qt::Key_BracketRight || e->key() == Qt::Key_BracketLeft) {
+        move_cursor_along_view(e->key() == Qt::Key_BracketRight ? 1e-3 : -1e-3);
+        return true;
+      }
+    }
+  }
+  return QMainWindow::eventFilter(watched, event);
+}
+
+}  // namespace fetouch::app::trainer

@@ -1,0 +1,119 @@
+// `fetouch trainer`, the real binary in a real window under Xvfb (label gui): every shipped scene
+// opens, runs 3 s with its scripted devices and closes with exit 0 and a screenshot; the 3D view's
+// probe region changes between rest and mid-press; without a display the command says to use
+// xvfb-run and exits 2.
+#include <gtest/gtest.h>
+#include <unistd.h>
+#include <vtkDataArray.h>
+#include <vtkImageData.h>
+#include <vtkNew.h>
+#include <vtkPNGReader.h>
+#include <vtkPointData.h>
+
+#include <cstdlib>
+#include <filesystem>
+
+#include "tests/support/run_command.h"
+
+namespace fetouch::testing {
+namespace {
+
+namespace fs = std::filesystem;
+
+fs::path scratch(const std::string& name) {
+  const fs::path dir = fs::temp_directory_path() / ("fetouch_trainer_" + name + "_" + std::to_string(::getpid()));
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  return dir;
+}
+
+struct Png {
+  int width = 0, height = 0;
+  vtkSmartPointer<vtkImageData> image;
+};
+
+Png read_png(const fs::path& file) {
+  vtkNew<vtkPNGReader> reader;
+  reader->SetFileName(file.string().c_str());
+  reader->Update();
+  Png p;
+  p.image = reader->GetOutput();
+  int dims[3];
+  p.image->GetDimensions(dims);
+  p.width = dims[0], p.height = dims[1];
+  return p;
+}
+
+// The mean absolute difference of two pictures over a box (fractions of width and height, from the
+// top left), in grey levels.
+double difference(const Png& a, const Png& b, double x0, double x1, double y0, double y1) {
+  vtkDataArray* pa = a.image->GetPointData()->GetScalars();
+  vtkDataArray* pb = b.image->GetPointData()->GetScalars();
+  double sum = 0;
+  long n = 0;
+  for (int y = static_cast<int>(y0 * a.height); y < static_cast<int>(y1 * a.height); ++y)
+    for (int x = static_cast<int>(x0 * a.width); x < static_cast<int>(x1 * a.width); ++x) {
+      const vtkIdType i = static_cast<vtkIdType>(a.height - 1 - y) * a.width + x;  // VTK's rows go up
+      for (int c = 0; c < 3; ++c) sum += std::abs(pa->GetComponent(i, c) - pb->GetComponent(i, c));
+      ++n;
+    }
+  return n ? sum / (3.0 * n) : 0;
+}
+
+TEST(TrainerCommand, EveryShippedSceneOpensRunsAndClosesWithAScreenshot) {
+  ASSERT_TRUE(std::getenv("DISPLAY")) << "this test opens windows: run it under xvfb-run -a (scripts/quickstart test does)";
+  const fs::path dir = scratch("scenes");
+  int ran = 0;
+  for (const auto& entry : fs::directory_iterator(fs::path(FETOUCH_SOURCE_DIR) / "config" / "scenes")) {
+    if (entry.path().extension() != ".yaml") continue;
+    const std::string name = entry.path().stem().string();
+    if (name == "spine_phantom" && !fs::exists(fs::path(FETOUCH_SOURCE_DIR) / ".." / "shared" / "data" / "ultrasound")) {
+      std::printf("skipping %s: ../shared/data/ultrasound is not beside the repository\n", name.c_str());
+      continue;
+    }
+    const fs::path shot = dir / (name + ".png");
+    const auto r = run_command(fetouch("trainer " + entry.path().string() + " --duration 3 --screenshot " + shot.string() +
+                                       " --out " + (dir / name).string() + " --json"));
+    EXPECT_EQ(r.exit_code, 0) << name << ": " << r.err;
+    ASSERT_TRUE(fs::exists(shot)) << name;
+    const Png png = read_png(shot);
+    EXPECT_GE(png.width, 800) << name;
+    EXPECT_NE(r.out.find("\"ticks\":3000"), std::string::npos) << name << ": " << r.out;
+    ++ran;
+  }
+  EXPECT_GE(ran, 5);
+}
+
+TEST(TrainerCommand, TheProbesRegionChangesBetweenRestAndMidPress) {
+  ASSERT_TRUE(std::getenv("DISPLAY")) << "run under xvfb-run -a";
+  const fs::path dir = scratch("press");
+  const std::string scene = (fs::path(FETOUCH_SOURCE_DIR) / "config" / "scenes" / "fetus_phantom.yaml").string();
+  // The scene's poke reaches the surface at 0.6 s and is 8 mm deep from 1.1 s to 2.1 s.
+  const auto rest = run_command(fetouch("trainer " + scene + " --duration 0.3 --screenshot " + (dir / "rest.png").string() +
+                                        " --out " + dir.string()));
+  const auto press = run_command(fetouch("trainer " + scene + " --duration 1.8 --screenshot " + (dir / "press.png").string() +
+                                         " --out " + dir.string()));
+  ASSERT_EQ(rest.exit_code, 0) << rest.err;
+  ASSERT_EQ(press.exit_code, 0) << press.err;
+  const Png a = read_png(dir / "rest.png"), b = read_png(dir / "press.png");
+  ASSERT_EQ(a.width, b.width);
+  ASSERT_EQ(a.height, b.height);
+  // The 3D view fills the left ~2/3 under the tool bar; the probe presses the top of the tissue in
+  // its middle. A band under the status bar, left of the colour bar, is where nothing should move.
+  const double probe = difference(a, b, 0.25, 0.45, 0.15, 0.45);
+  const double corner = difference(a, b, 0.02, 0.10, 0.70, 0.90);
+  EXPECT_GT(probe, 3.0) << "the probe's region should change between rest and mid-press";
+  EXPECT_LT(corner, 1.0) << "the background should not change";
+  // And the ultrasound image (right column, top) shows the press too.
+  EXPECT_GT(difference(a, b, 0.70, 0.98, 0.08, 0.55), 1.0);
+}
+
+TEST(TrainerCommand, WithoutADisplayItSaysToUseXvfbAndExits2) {
+  const std::string scene = (fs::path(FETOUCH_SOURCE_DIR) / "config" / "scenes" / "fetus_phantom.yaml").string();
+  const auto r = run_command("env -u DISPLAY -u WAYLAND_DISPLAY " + fetouch("trainer " + scene + " --duration 1"));
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("xvfb-run -a"), std::string::npos) << r.err;
+}
+
+}  // namespace
+}  // namespace fetouch::testing

@@ -1,0 +1,127 @@
+// The trainer window's controls driven by QTest (label gui, under Xvfb): pause stops simulated
+// time (the tick count does not grow), reset returns the tissue to rest (displacement 0 in the
+// snapshot), record writes a take that `fetouch replay` accepts, and keys move the mouse probe's
+// cursor into the tissue so that its force rises with depth.
+#include <gtest/gtest.h>
+#include <unistd.h>
+#include <QApplication>
+#include <QSurfaceFormat>
+#include <QTest>
+#include <QVTKOpenGLNativeWidget.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <memory>
+
+#include "app/scene_mesh.h"
+#include "app/trainer/trainer_window.h"
+#include "tests/support/run_command.h"
+
+namespace fetouch::testing {
+namespace {
+
+namespace fs = std::filesystem;
+using app::trainer::TrainerWindow;
+
+QApplication& application() {
+  static int argc = 1;
+  static char name[] = "trainer_window_tests";
+  static char* argv[] = {name, nullptr};
+  // Never destroyed: the process ends without tearing Qt down after MPI has finalised.
+  static QApplication* app = nullptr;
+  if (!app) {
+    QSurfaceFormat::setDefaultFormat(QVTKOpenGLNativeWidget::defaultFormat());
+    app = new QApplication(argc, argv);
+  }
+  return *app;
+}
+
+config::Scene scene(const std::string& file) {
+  std::optional<config::Scene> s = app::load_scene_or_report((fs::path(FETOUCH_SOURCE_DIR) / "config" / "scenes" / file).string());
+  EXPECT_TRUE(s);
+  return *s;
+}
+
+double largest_displacement(const TrainerWindow& w) {
+  double largest = 0;
+  const auto& u = w.shown().displacement;
+  for (std::size_t i = 0; i + 2 < u.size(); i += 3) largest = std::max(largest, double(std::hypot(u[i], u[i + 1], u[i + 2])));
+  return largest;
+}
+
+class TrainerWindowTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    if (!std::getenv("DISPLAY")) GTEST_SKIP() << "no display: run under xvfb-run -a";
+    application();
+    out_ = fs::temp_directory_path() / ("fetouch_trainer_window_" + std::to_string(::getpid()));
+    fs::remove_all(out_);
+  }
+  fs::path out_;
+};
+
+TEST_F(TrainerWindowTest, PauseStopsTimeResetReturnsToRestRecordReplays) {
+  app::trainer::WindowOptions options;
+  options.out = out_;
+  TrainerWindow w(scene("fetus_phantom.yaml"), {}, options);
+  w.show();
+  QApplication::setActiveWindow(&w);  // shortcuts go to the active window (Xvfb has no window manager)
+  ASSERT_TRUE(w.session());
+  // Into the poke's hold (8 mm deep from 1.1 s).
+  QTest::qWait(1700);
+  EXPECT_GT(largest_displacement(w), 2e-3) << "mid-press, the tissue should be pushed in";
+  QTest::keyClick(&w, Qt::Key_Space);
+  QTest::qWait(200);
+  const long paused_at = w.session()->monitor().ticks.load();
+  QTest::qWait(700);
+  EXPECT_EQ(w.session()->monitor().ticks.load(), paused_at) << "paused: no tick runs";
+  EXPECT_TRUE(w.session()->paused());
+  QTest::keyClick(&w, Qt::Key_Space);
+  QTest::qWait(300);
+  EXPECT_GT(w.session()->monitor().ticks.load(), paused_at + 100) << "resumed";
+  // Reset: a new take from rest.
+  QTest::keyClick(&w, Qt::Key_R);
+  EXPECT_EQ(largest_displacement(w), 0.0) << "after a reset the tissue is at rest";
+  EXPECT_LT(w.session()->monitor().ticks.load(), 200);
+  // Record a take, stop it, and replay it with the real binary.
+  QTest::keyClick(&w, Qt::Key_R, Qt::ControlModifier);
+  ASSERT_TRUE(w.recording());
+  const fs::path take = *w.recording();
+  QTest::qWait(1500);
+  QTest::keyClick(&w, Qt::Key_R, Qt::ControlModifier);
+  EXPECT_FALSE(w.recording());
+  ASSERT_TRUE(fs::exists(take));
+  const auto replay = run_command(fetouch("replay " + (fs::path(FETOUCH_SOURCE_DIR) / "config/scenes/fetus_phantom.yaml").string() +
+                                          " --trajectory " + take.string() + " --mesh-every 0 --out " + (out_ / "replayed").string()));
+  EXPECT_EQ(replay.exit_code, 0) << replay.err;
+}
+
+TEST_F(TrainerWindowTest, TheMouseProbeFollowsTheCursorIntoTheTissue) {
+  app::trainer::TrainerOptions session;
+  session.mouse = true;
+  app::trainer::WindowOptions options;
+  options.out = out_;
+  TrainerWindow w(scene("fetus_phantom.yaml"), session, options);
+  w.show();
+  QApplication::setActiveWindow(&w);
+  ASSERT_TRUE(w.session() && w.session()->cursor());
+  QTest::qWait(300);
+  const auto force = [&w] { return w.session()->monitor().force_n[0].load(); };
+  EXPECT_LT(force(), 1e-6) << "the cursor starts 1 cm above the tissue";
+  // Push the cursor down (the probe's patch normal points up here) 14 mm, then 4 mm more.
+  w.set_cursor(w.cursor() - Eigen::Vector3d(0, 0, 0.014));
+  QTest::qWait(1500);
+  const double shallow = force();
+  w.set_cursor(w.cursor() - Eigen::Vector3d(0, 0, 0.004));
+  QTest::qWait(1500);
+  const double deep = force();
+  std::printf("force with the cursor 4 mm and 8 mm below the surface: %.3f N, %.3f N\n", shallow, deep);
+  EXPECT_GT(shallow, 0.01);
+  EXPECT_GT(deep, shallow * 1.2) << "the force rises with depth";
+}
+
+}  // namespace
+}  // namespace fetouch::testing
+
