@@ -214,6 +214,19 @@ void advance(timespec& t, long nanoseconds) {
 constexpr long kSpinNs = 100'000;  // the haptic thread spins the last 100 us before each deadline
 constexpr double kRampOutS = 0.2;  // a stopped session's force ramps out over this time
 
+// The cores the process may use, as they were before share_haptic_core() narrowed the calling
+// thread's (and so its children's) set.
+bool g_cores_saved = false;
+cpu_set_t g_cores;
+
+bool allowed_cores(cpu_set_t& allowed) {
+  if (g_cores_saved) {
+    allowed = g_cores;
+    return true;
+  }
+  return sched_getaffinity(0, sizeof allowed, &allowed) == 0;
+}
+
 // The cores the session's threads run on: the haptic thread alone on the last one, the rest for
 // the solver (its assembly threads and factorisation worker follow it) and the I/O thread. None
 // with fewer than 2 cores, or when the process may not use them all.
@@ -224,7 +237,7 @@ struct CoreSplit {
     CoreSplit split;
     cpu_set_t allowed;
     CPU_ZERO(&allowed);
-    if (!wanted || sched_getaffinity(0, sizeof allowed, &allowed) != 0 || CPU_COUNT(&allowed) < 2) return split;
+    if (!wanted || !allowed_cores(allowed) || CPU_COUNT(&allowed) < 2) return split;
     for (int c = CPU_SETSIZE - 1; c >= 0; --c)
       if (CPU_ISSET(c, &allowed)) {
         split.haptic = c;
@@ -253,7 +266,18 @@ int realtime_solver_cores(const SessionSettings& settings) {
   if (split.haptic >= 0) return CPU_COUNT(&split.others);
   cpu_set_t allowed;
   CPU_ZERO(&allowed);
-  return sched_getaffinity(0, sizeof allowed, &allowed) == 0 ? CPU_COUNT(&allowed) : 1;
+  return allowed_cores(allowed) ? CPU_COUNT(&allowed) : 1;
+}
+
+void share_haptic_core() {
+  const CoreSplit split = CoreSplit::make(true);
+  if (split.haptic < 0) return;
+  sched_getaffinity(0, sizeof g_cores, &g_cores);
+  g_cores_saved = true;
+  cpu_set_t one;
+  CPU_ZERO(&one);
+  CPU_SET(split.haptic, &one);
+  pthread_setaffinity_np(pthread_self(), sizeof one, &one);
 }
 
 SessionSummary run_realtime(haptics::Environment& environment, std::vector<std::unique_ptr<haptics::Device>>& devices,

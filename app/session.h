@@ -119,4 +119,10 @@ SessionSummary run_realtime(haptics::Environment& environment, std::vector<std::
 // thread's (when it has one of its own).
 int realtime_solver_cores(const SessionSettings& settings);
 
+// Puts the calling thread (and the threads it starts from now on) on the core run_realtime gives the
+// haptic thread (nothing with fewer than 2 cores): for a window's thread and its software
+// renderer's threads. The haptic thread, real-time scheduled (SCHED_FIFO), preempts them at each
+// tick and leaves them most of that core, while the solver keeps the others to itself.
+void share_haptic_core();
+
 }  // namespace fetouch::app

@@ -15,6 +15,7 @@
 #include "app/log.h"
 #include "app/mpi_session.h"
 #include "app/scene_mesh.h"
+#include "app/session.h"
 #include "app/trainer/trainer_window.h"
 
 namespace fetouch::app {
@@ -46,6 +47,9 @@ int run_trainer(const TrainerCommandOptions& o) {
     return kExitBadInput;
   }
   ensure_mpi();
+  // The window, and the threads of a software OpenGL renderer, share the haptic thread's core
+  // (which it preempts at every tick) and leave the solver its own.
+  share_haptic_core();
   QSurfaceFormat::setDefaultFormat(QVTKOpenGLNativeWidget::defaultFormat());
   static int argc = 1;
   static char name[] = "fetouch";

@@ -49,6 +49,8 @@ TrainerWindow::TrainerWindow(const config::Scene& scene, const TrainerOptions& s
   vtk_widget_->setRenderWindow(render_window);
   render_window_ = render_window;
   auto renderer = vtkSmartPointer<vtkRenderer>::New();
+  // No multisampling: with software OpenGL (Xvfb, remote desktops) it costs most of a frame.
+  render_window->SetMultiSamples(0);
   render_window_->AddRenderer(renderer);
   renderer_ = renderer;
   vtk_widget_->installEventFilter(this);
@@ -136,7 +138,7 @@ void TrainerWindow::start_take(const std::optional<std::filesystem::path>& recor
   force_plot_->clear();
   frame_plot_->clear();
   frame_plot_->set_limit(1e3 * session_->solver_period_s(), "budget");
-  last_frame_ = -2, frames_seen_ = 0, overruns_ = 0;
+  last_frame_ = -2, frames_seen_ = 0, overruns_ = 0, imaged_frame_ = -3;
   session_->want_stress(field_ == ColourField::von_mises);
   if (session_->take_snapshot()) shown_ = session_->snapshot();
   if (session_->cursor()) {
@@ -182,9 +184,17 @@ void TrainerWindow::tick() {
     for (int i = 0; i < probes && i < SessionMonitor::kMaxDevices; ++i) force_plot_->add(i, t, p[i].force.norm());
     changed = true;
   }
-  if (changed && !shown_.patch_centre.empty()) {
+  // The image plane follows the probe at the window's rate (through its proxy on the surface while
+  // it touches, else through its patch), the tissue in it at the solver's: a new image when either
+  // moved.
+  if (!shown_.patch_centre.empty()) {
     const int probe = std::max(0, session_->cursor_probe());
-    update_ultrasound(shown_.patch_centre[probe], shown_.patch_normal[probe]);
+    const SessionMonitor::ProbeTick& t = monitor.probes.front()[probe];
+    const Eigen::Vector3d at = t.in_contact ? t.proxy : shown_.patch_centre[probe];
+    if (shown_.frame != imaged_frame_ || (at - imaged_at_).norm() > 5e-5) {
+      update_ultrasound(at, shown_.patch_normal[probe]);
+      imaged_frame_ = shown_.frame, imaged_at_ = at;
+    }
   }
   render_window_->Render();
   ++figures_.renders;

@@ -98,7 +98,8 @@ class TrainerWindow : public QMainWindow {
   SlicePlane plane_;
   std::optional<std::filesystem::path> recording_;
   int takes_ = 0, screenshots_ = 0;
-  long last_frame_ = -2, last_ticks_ = 0, frames_seen_ = 0, overruns_ = 0;
+  long last_frame_ = -2, frames_seen_ = 0, overruns_ = 0, imaged_frame_ = -3;
+  Eigen::Vector3d imaged_at_ = Eigen::Vector3d::Zero();  // where the shown image's plane went through
   double haptic_hz_ = 0, solver_hz_ = 0, ultrasound_hz_ = 0;
   std::chrono::steady_clock::time_point started_, rate_from_;
   long rate_ticks_ = 0, rate_frames_ = 0, rate_images_ = 0;

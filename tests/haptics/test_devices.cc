@@ -196,5 +196,25 @@ TEST(ScriptedPath, PokeSlideAndSqueezeFollowTheirPhases) {
   EXPECT_THROW(scripted_path(PathShape::poke, s), std::invalid_argument);
 }
 
+// The mouse's hand model: pulled to a cursor moved from another thread, it settles where its spring
+// balances the force it is sent, target + F / k (a closed form), and follows a new target.
+TEST(CursorOperator, SettlesWhereItsSpringBalancesTheForceAndFollowsTheCursor) {
+  const HandParameters hand{0.1, 200, 9};
+  CursorOperator cursor(Eigen::Vector3d(0, 0, 0.05), hand, 1e-3);
+  EXPECT_FALSE(cursor.finished());
+  EXPECT_EQ(cursor.ticks(), -1);
+  const Eigen::Vector3d force(0, 0, 0.8);
+  cursor.set_target(Eigen::Vector3d(0.01, 0, 0.03));
+  Eigen::Vector3d p;
+  for (int k = 0; k < 3000; ++k) p = cursor.next(force);
+  EXPECT_NEAR(p.x(), 0.01, 1e-9);
+  EXPECT_NEAR(p.z(), 0.03 + 0.8 / 200, 1e-9);
+  // A target set between ticks is taken at the next read; a NaN force is ignored.
+  cursor.set_target(Eigen::Vector3d(0, 0.02, 0));
+  for (int k = 0; k < 3000; ++k) p = cursor.next(Eigen::Vector3d::Constant(std::nan("")));
+  EXPECT_NEAR((p - Eigen::Vector3d(0, 0.02, 0)).norm(), 0, 1e-9);
+  EXPECT_THROW(CursorOperator(Eigen::Vector3d::Zero(), HandParameters{0, 200, 9}, 1e-3), std::invalid_argument);
+}
+
 }  // namespace
 }  // namespace fetouch::haptics
