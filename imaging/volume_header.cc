@@ -190,7 +190,10 @@ std::map<std::string, std::string> text_header(const std::filesystem::path& path
                                  std::to_string(kMaxMetaImageLine));
     }
     if (at == std::string::npos) continue;
-    const std::string key = trim(line.substr(0, at)), value = trim(line.substr(at + 1 + (separator == ':' && line.compare(at, 2, ":=") == 0)));
+    // NRRD's "key:=value" pairs are not fields: kept apart, so that "sizes:=8 8 8" does not pass for
+    // the sizes field VTK's reader then lacks (it crashed reading the data; found by fuzz_volume).
+    const bool pair = separator == ':' && line.compare(at, 2, ":=") == 0;
+    const std::string key = (pair ? "key-value pair " : "") + trim(line.substr(0, at)), value = trim(line.substr(at + 1 + pair));
     // A field given twice: this parser and VTK's could each believe a different one.
     if (!keys.emplace(key, value).second)
       throw std::runtime_error(path.string() + ":" + std::to_string(number) + ": '" + shown(key) +
