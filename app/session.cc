@@ -15,6 +15,7 @@
 #include <stdexcept>
 #include <thread>
 
+#include "app/realtime_cores.h"
 #include "haptics/lock_free.h"
 
 namespace fetouch::app {
@@ -214,71 +215,7 @@ void advance(timespec& t, long nanoseconds) {
 constexpr long kSpinNs = 100'000;  // the haptic thread spins the last 100 us before each deadline
 constexpr double kRampOutS = 0.2;  // a stopped session's force ramps out over this time
 
-// The cores the process may use, as they were before share_haptic_core() narrowed the calling
-// thread's (and so its children's) set.
-bool g_cores_saved = false;
-cpu_set_t g_cores;
-
-bool allowed_cores(cpu_set_t& allowed) {
-  if (g_cores_saved) {
-    allowed = g_cores;
-    return true;
-  }
-  return sched_getaffinity(0, sizeof allowed, &allowed) == 0;
-}
-
-// The cores the session's threads run on: the haptic thread alone on the last one, the rest for
-// the solver (its assembly threads and factorisation worker follow it) and the I/O thread. None
-// with fewer than 2 cores, or when the process may not use them all.
-struct CoreSplit {
-  int haptic = -1;
-  cpu_set_t others{};
-  static CoreSplit make(bool wanted) {
-    CoreSplit split;
-    cpu_set_t allowed;
-    CPU_ZERO(&allowed);
-    if (!wanted || !allowed_cores(allowed) || CPU_COUNT(&allowed) < 2) return split;
-    for (int c = CPU_SETSIZE - 1; c >= 0; --c)
-      if (CPU_ISSET(c, &allowed)) {
-        split.haptic = c;
-        break;
-      }
-    split.others = allowed;
-    CPU_CLR(split.haptic, &split.others);
-    return split;
-  }
-  bool pin_haptic() const {
-    if (haptic < 0) return false;
-    cpu_set_t one;
-    CPU_ZERO(&one);
-    CPU_SET(haptic, &one);
-    return pthread_setaffinity_np(pthread_self(), sizeof one, &one) == 0;
-  }
-  void pin_other() const {
-    if (haptic >= 0) pthread_setaffinity_np(pthread_self(), sizeof others, &others);
-  }
-};
-
 }  // namespace
-
-int realtime_solver_cores(const SessionSettings& settings) {
-  const CoreSplit split = CoreSplit::make(settings.pin_haptic_core);
-  if (split.haptic >= 0) return CPU_COUNT(&split.others);
-  cpu_set_t allowed;
-  CPU_ZERO(&allowed);
-  return allowed_cores(allowed) ? CPU_COUNT(&allowed) : 1;
-}
-
-void share_haptic_core() {
-  const CoreSplit split = CoreSplit::make(true);
-  if (split.haptic < 0) return;
-  sched_getaffinity(0, sizeof g_cores, &g_cores);
-  g_cores_saved = true;
-  cpu_set_t one;
-  CPU_ZERO(&one);
-  CPU_SET(split.haptic, &one);
-  pthread_setaffinity_np(pthread_self(), sizeof one, &one);
-}
 
 SessionSummary run_realtime(haptics::Environment& environment, std::vector<std::unique_ptr<haptics::Device>>& devices,
                             const SessionSettings& settings) {

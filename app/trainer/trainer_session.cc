@@ -32,6 +32,16 @@ Eigen::Vector3d above_the_tissue(const MeshView& mesh) {
   return {0.5 * (low.x() + high.x()), 0.5 * (low.y() + high.y()), high.z() + 0.01};
 }
 
+// Each probe's contact patch as it is now (deformed): its centre and normal.
+void patches(const fem::QuasiStaticSolver& solver, int probes, TissueSnapshot& s) {
+  s.patch_centre.resize(probes), s.patch_normal.resize(probes);
+  for (int p = 0; p < probes; ++p) {
+    const dealii::Point<3> c = solver.patch_center(p);
+    const dealii::Tensor<1, 3> n = solver.patch_normal(p);
+    s.patch_centre[p] = {c[0], c[1], c[2]}, s.patch_normal[p] = {n[0], n[1], n[2]};
+  }
+}
+
 }  // namespace
 
 TrainerSession::TrainerSession(const config::Scene& scene, const TrainerOptions& options, std::vector<std::string>& messages)
@@ -121,23 +131,13 @@ TrainerSession::TrainerSession(const config::Scene& scene, const TrainerOptions&
     } else {
       s.von_mises.clear();
     }
-    s.patch_centre.resize(probes), s.patch_normal.resize(probes);
-    for (int p = 0; p < probes; ++p) {
-      const dealii::Point<3> c = fem.solver().patch_center(p);
-      const dealii::Tensor<1, 3> n = fem.solver().patch_normal(p);
-      s.patch_centre[p] = {c[0], c[1], c[2]}, s.patch_normal[p] = {n[0], n[1], n[2]};
-    }
+    patches(fem.solver(), probes, s);
     snapshots_.publish();
   };
   // At rest, before the first frame.
   TissueSnapshot& rest = snapshots_.back();
   fem.solver().vertex_displacements(rest.displacement);
-  rest.patch_centre.resize(probes), rest.patch_normal.resize(probes);
-  for (int p = 0; p < probes; ++p) {
-    const dealii::Point<3> c = fem.solver().patch_center(p);
-    const dealii::Tensor<1, 3> n = fem.solver().patch_normal(p);
-    rest.patch_centre[p] = {c[0], c[1], c[2]}, rest.patch_normal[p] = {n[0], n[1], n[2]};
-  }
+  patches(fem.solver(), probes, rest);
   snapshots_.publish();
 }
 
