@@ -24,10 +24,17 @@ namespace fs = std::filesystem;
 
 namespace {
 
-// What decides the mesh: the volume (path, size, modification time) and every meshing option.
+// The mesher's revision: raised whenever the same volume and options give a different mesh (2: the
+// boundary moved out to the segmented volume, regions by their labels' cover), so that a mesh cached
+// by an older Fetouch is made again.
+constexpr int kMesherRevision = 2;
+
+// What decides the mesh: the mesher's revision, the volume (path, size, modification time) and
+// every meshing option.
 std::string cache_key(const config::MeshSpec& spec) {
   std::ostringstream key;
   key.precision(17);
+  key << "mesher " << kMesherRevision << '|';
   const auto& m = spec.meshing;
   std::error_code ec;
   if (spec.source == config::MeshSource::phantom) {

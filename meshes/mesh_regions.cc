@@ -91,32 +91,92 @@ void assign_regions(VolumeMesh& mesh, const MaskVolume& labels, const std::vecto
     return best;
   };
 
-  const std::size_t n = regions.size();
   mesh.region_names.clear();
   for (const auto& r : regions) mesh.region_names.push_back(r.name);
+  // Sample points spread evenly through a tetrahedron: barycentric (a + 1/2) / (n + 2) for the
+  // whole numbers a_0 + a_1 + a_2 + a_3 = n, all strictly inside (35 points for n = 4, about one per
+  // voxel for elements of 5 to 6 voxels): the counts estimate how much of the element each region's
+  // labels cover.
+  constexpr int n_split = 4;
+  std::vector<std::array<double, 4>> samples;
+  for (int a = 0; a <= n_split; ++a)
+    for (int b = 0; a + b <= n_split; ++b)
+      for (int c = 0; a + b + c <= n_split; ++c) {
+        const auto w = [](int k) { return (k + 0.5) / (n_split + 2); };
+        samples.push_back({w(a), w(b), w(c), w(n_split - a - b - c)});
+      }
+  const std::size_t n = regions.size();
+  std::vector<std::vector<int>> votes(mesh.tetrahedra.size(), std::vector<int>(n, 0));
+  std::vector<double> volume_m3(mesh.tetrahedra.size());
+  std::vector<double> covered_m3(n, 0), assigned_m3(n, 0);  // each region's labels inside the mesh; its elements
   mesh.region.assign(mesh.tetrahedra.size(), 0);
   for (std::size_t t = 0; t < mesh.tetrahedra.size(); ++t) {
+    const Tet& tet = mesh.tetrahedra[t];
+    const auto& p = mesh.nodes_m;
+    volume_m3[t] = tet_signed_volume(p[std::size_t(tet[0])], p[std::size_t(tet[1])], p[std::size_t(tet[2])], p[std::size_t(tet[3])]);
+    std::array<std::array<double, 3>, 4> corner_mm{};
     std::array<double, 3> centroid{0, 0, 0};
-    for (const int v : mesh.tetrahedra[t])
-      for (int c = 0; c < 3; ++c) centroid[c] += 0.25e3 * mesh.nodes_m[std::size_t(v)][c];
-    std::vector<int> votes(n, 0);
-    const int at_centroid = region_at(centroid);
-    if (at_centroid >= 0) ++votes[std::size_t(at_centroid)];
-    for (const int v : mesh.tetrahedra[t]) {
-      std::array<double, 3> x{};
-      for (int c = 0; c < 3; ++c) x[c] = 0.5 * (centroid[c] + 1e3 * mesh.nodes_m[std::size_t(v)][c]);
-      if (const int r = region_at(x); r >= 0) ++votes[std::size_t(r)];
+    for (int k = 0; k < 4; ++k)
+      for (int c = 0; c < 3; ++c) {
+        corner_mm[k][c] = 1e3 * p[std::size_t(tet[k])][c];
+        centroid[c] += 0.25 * corner_mm[k][c];
+      }
+    std::vector<int>& count = votes[t];
+    for (const auto& w : samples) {
+      std::array<double, 3> x{0, 0, 0};
+      for (int k = 0; k < 4; ++k)
+        for (int c = 0; c < 3; ++c) x[c] += w[k] * corner_mm[k][c];
+      if (const int r = region_at(x); r >= 0) ++count[std::size_t(r)];
     }
-    const int most = *std::max_element(votes.begin(), votes.end());
-    const bool tie = std::count(votes.begin(), votes.end(), most) > 1;
-    int chosen = static_cast<int>(std::max_element(votes.begin(), votes.end()) - votes.begin());
-    if (most == 0 || (tie && (at_centroid < 0 || votes[std::size_t(at_centroid)] != most))) {
-      const int nearest = nearest_region(centroid);
-      if (nearest >= 0 && (most == 0 || votes[std::size_t(nearest)] == most)) chosen = nearest;
-    } else if (tie) {
-      chosen = at_centroid;
+    const int most = *std::max_element(count.begin(), count.end());
+    int chosen = static_cast<int>(std::max_element(count.begin(), count.end()) - count.begin());
+    if (most == 0 || std::count(count.begin(), count.end(), most) > 1) {
+      // No sample in any region, or two regions cover as much: the centroid's region, or its nearest.
+      const int at_centroid = region_at(centroid);
+      const int nearest = at_centroid >= 0 ? at_centroid : nearest_region(centroid);
+      if (nearest >= 0 && (most == 0 || count[std::size_t(nearest)] == most)) chosen = nearest;
     }
     mesh.region[t] = chosen;
+    assigned_m3[std::size_t(chosen)] += volume_m3[t];
+    for (std::size_t r = 0; r < n; ++r) covered_m3[r] += volume_m3[t] * count[r] / double(samples.size());
+  }
+
+  // The most-covered region loses volume on a curved interface (a convex region by 2 to 4 % at 5 to
+  // 6 voxels per element, its neighbour gains it). The elements that two regions share nearly
+  // evenly (the other covering at least 40 % as much as the chosen one) are then handed over, most
+  // evenly shared first, whenever that brings both regions' element volumes closer (relatively) to
+  // the volume their labels cover inside the mesh. Every hand-over stays within an element of the
+  // labels' interface; the result does not depend on the order Gmsh numbers the elements.
+  struct HandOver {
+    double share;  // the other region's cover over the chosen one's
+    std::size_t t;
+    int to;
+  };
+  std::vector<HandOver> candidates;
+  for (std::size_t t = 0; t < mesh.tetrahedra.size(); ++t) {
+    const int own = votes[t][std::size_t(mesh.region[t])];
+    for (std::size_t r = 0; r < n; ++r)
+      if (int(r) != mesh.region[t] && own > 0 && votes[t][r] >= 0.4 * own)
+        candidates.push_back({double(votes[t][r]) / own, t, int(r)});
+  }
+  std::sort(candidates.begin(), candidates.end(), [&](const HandOver& a, const HandOver& b) {
+    if (a.share != b.share) return a.share > b.share;
+    return volume_m3[a.t] > volume_m3[b.t];
+  });
+  const auto misfit = [&](std::size_t r, double assigned) {
+    return covered_m3[r] > 0 ? std::pow(assigned / covered_m3[r] - 1, 2) : 0.0;
+  };
+  std::vector<char> handed(mesh.tetrahedra.size(), 0);
+  for (const HandOver& c : candidates) {
+    if (handed[c.t]) continue;
+    const std::size_t from = std::size_t(mesh.region[c.t]), to = std::size_t(c.to);
+    const double v = volume_m3[c.t];
+    const double before = misfit(from, assigned_m3[from]) + misfit(to, assigned_m3[to]);
+    const double after = misfit(from, assigned_m3[from] - v) + misfit(to, assigned_m3[to] + v);
+    if (after >= before) continue;
+    assigned_m3[from] -= v, assigned_m3[to] += v;
+    mesh.region[c.t] = c.to;
+    handed[c.t] = 1;
   }
 
   // The report: elements, volume against the voxels', quality; outer and interface faces.

@@ -1,9 +1,11 @@
 // Regions of a mesh made from a label map: `fetouch mesh --regions wall=1 fluid=2 fetus=3,4,5,6`
 // meshes the union of the regions' labels once (volume_mesher.h) and gives every tetrahedron the
-// region whose labels cover most of it, sampled at its centroid and halfway from the centroid to
-// each vertex (a tie or no hit: the centroid's nearest labelled voxel). The regions then share
-// their interfaces node for node by construction; an interface follows element faces, so it is
-// accurate to about an element (the report gives each region's volume against its voxels').
+// region whose labels cover most of it, counted at 35 points spread evenly through it (a tie or no
+// hit: the centroid's region, else its nearest labelled voxel); elements two regions share nearly
+// evenly are then handed over where that brings both regions' volumes closer to their labels'
+// cover. The regions share their interfaces node for node by construction; an interface follows
+// element faces, so it is accurate to about an element (the report gives each region's volume
+// against its voxels').
 #pragma once
 
 #include <string>

@@ -49,6 +49,15 @@ struct QualityReport {
 // Dihedral angles and radius ratios of every element, inverted and degenerate ones counted.
 QualityReport mesh_quality(const std::vector<Point3>& nodes, const std::vector<Tet>& tets);
 
+// Moves the boundary nodes along their (area-weighted) normals by one offset so that the mesh
+// encloses `target_volume` (a surface remeshed by chords, or contoured from a blurred mask, lies a
+// little inside a convex shape; a few tenths of a millimetre over a whole uterus is 3 % of its
+// wall). The offset is at most `max_offset` either way; none is applied if it would turn an element
+// over or flatten one below `floor_deg` where it was above. Returns the offset applied (0:
+// none), in the nodes' unit.
+double restore_volume(std::vector<Point3>& nodes, const std::vector<Tet>& tets, double target_volume, double max_offset,
+                      double floor_deg);
+
 struct SliverRepair {
   int peeled = 0, flips23 = 0, flips32 = 0, relocated = 0;
   double peeled_volume = 0;  // the volume cut away by peeling

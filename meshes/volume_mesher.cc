@@ -159,6 +159,9 @@ VolumeMesh fill_surface(vtkSmartPointer<vtkPolyData> surface, const MeshingSetti
       GmshFill fill = gmsh_fill(nodes_mm, corners, s, path);
       mesh.nodes_m = std::move(fill.nodes_m), mesh.tetrahedra = std::move(fill.tetrahedra);
       mesh.surface_remeshed = fill.surface_remeshed;
+      // The boundary back out to the segmented volume (tet_repair.h), by a tenth of an element at most.
+      mesh.surface_offset_mm = 1e3 * restore_volume(mesh.nodes_m, mesh.tetrahedra, base.segmented_volume_m3,
+                                                    0.1e-3 * s.element_size_mm, s.min_dihedral_deg);
       const auto repair_started = std::chrono::steady_clock::now();
       // Slivers the optimiser left (against the surface, whose nodes it keeps): peeled, flipped
       // away or relocated (meshes/tet_repair.h), then the boundary as the elements now have it.

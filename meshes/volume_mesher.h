@@ -58,6 +58,7 @@ struct VolumeMesh {
   bool closed_manifold = false;
   bool surface_remeshed = false;  // Gmsh parametrised and remeshed the surface (else kept as decimated)
   SliverRepair repair;            // what the sliver repair did after Gmsh
+  double surface_offset_mm = 0;   // how far the boundary was moved out to keep the segmented volume
   // How the mesh was made: the path taken (meshes/gmsh_fill.h's describe), each path tried with its
   // outcome, whether the smallest dihedral angle reached MeshingSettings::min_dihedral_deg, and the
   // seconds of each phase ("surface", "volume mesh", "optimisation": Gmsh's optimisers and the

@@ -197,6 +197,7 @@ int run_mesh(const MeshOptions& o) {
   json.key("relocated").value(mesh.repair.relocated);
   json.end_object();
   json.key("surface_remeshed").value(mesh.surface_remeshed);
+  json.key("surface_offset_mm").value(mesh.surface_offset_mm);
   json.key("path").value(mesh.path);
   json.key("paths_tried").begin_array();
   for (const auto& a : mesh.attempts) json.value(a);
@@ -230,8 +231,8 @@ int run_mesh(const MeshOptions& o) {
     std::printf("%zu tetrahedra, %zu nodes, %zu boundary triangles (%s) in %.1f s\n", mesh.tetrahedra.size(),
                 mesh.nodes_m.size(), mesh.boundary.size(),
                 mesh.closed_manifold ? "closed, manifold" : "NOT closed and manifold", seconds);
-    std::printf("  volume %.4g ml against %.4g ml segmented (%+.2f %%)\n", mesh.volume_m3 * 1e6,
-                mesh.segmented_volume_m3 * 1e6, 100 * volume_error);
+    std::printf("  volume %.4g ml against %.4g ml segmented (%+.2f %%; boundary moved out %.2f mm to keep it)\n",
+                mesh.volume_m3 * 1e6, mesh.segmented_volume_m3 * 1e6, 100 * volume_error, mesh.surface_offset_mm);
     std::printf("  dihedral angles %.1f to %.1f deg, radius ratio from %.3f, %ld inverted, %ld degenerate\n",
                 q.min_dihedral_deg, q.max_dihedral_deg, q.min_radius_ratio, q.inverted, q.degenerate);
     const auto& r = mesh.repair;

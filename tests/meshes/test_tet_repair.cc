@@ -1,6 +1,7 @@
 // Tetrahedral geometry and sliver repair against closed forms: a regular and a corner
 // tetrahedron's dihedral angles, a unit cube's boundary (divergence theorem), pinched meshes, and
-// each repair operation on a configuration whose answer is known.
+// each repair operation on a configuration whose answer is known, and the boundary moved out to a
+// volume on an icosahedron (whose vertex normals are radial by symmetry, so the offset is known).
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -219,6 +220,63 @@ TEST(SliverRepair, MovesAnInteriorNodeBackTowardsTheCentre) {
   EXPECT_NEAR(total_volume(nodes, tets), 4.0 / 3, 1e-14);
   EXPECT_GT(worst(nodes, tets), 45);
   for (int k = 1; k < 7; ++k) EXPECT_EQ(std::abs(nodes[k][0]) + std::abs(nodes[k][1]) + std::abs(nodes[k][2]), 1);
+}
+
+// A regular icosahedron of circumradius 1 as 20 tetrahedra about its centre: its 12 boundary nodes'
+// normals are radial by symmetry, so moving them by d scales it by 1 + d and the offset that gives a
+// volume V is (V / V0)^(1/3) - 1, with V0 = 5/12 (3 + sqrt 5) a^3 and a = 1 / sin(2 pi / 5).
+TEST(RestoreVolume, AnIcosahedronGrowsToTheSpheresVolume) {
+  const double phi = (1 + std::sqrt(5.0)) / 2, scale = 1 / std::sqrt(1 + phi * phi);
+  std::vector<Point3> nodes{{0, 0, 0}};
+  for (const double s1 : {-1.0, 1.0})
+    for (const double s2 : {-1.0, 1.0}) {
+      nodes.push_back({0, s1 * scale, s2 * phi * scale});
+      nodes.push_back({s1 * scale, s2 * phi * scale, 0});
+      nodes.push_back({s2 * phi * scale, 0, s1 * scale});
+    }
+  // The faces: the triples of vertices at the edge length from one another.
+  const double edge = 2 * scale;
+  const auto dist = [&](int a, int b) {
+    return std::sqrt(std::pow(nodes[a][0] - nodes[b][0], 2) + std::pow(nodes[a][1] - nodes[b][1], 2) +
+                     std::pow(nodes[a][2] - nodes[b][2], 2));
+  };
+  std::vector<Tet> tets;
+  for (int a = 1; a <= 12; ++a)
+    for (int b = a + 1; b <= 12; ++b)
+      for (int c = b + 1; c <= 12; ++c)
+        if (std::abs(dist(a, b) - edge) < 1e-9 && std::abs(dist(b, c) - edge) < 1e-9 && std::abs(dist(a, c) - edge) < 1e-9) {
+          Tet t{0, a, b, c};
+          if (tet_signed_volume(nodes[0], nodes[a], nodes[b], nodes[c]) < 0) std::swap(t[2], t[3]);
+          tets.push_back(t);
+        }
+  ASSERT_EQ(tets.size(), 20u);
+  const double a = 1 / std::sin(2 * M_PI / 5);
+  const double v0 = 5.0 / 12 * (3 + std::sqrt(5.0)) * a * a * a;
+  ASSERT_NEAR(total_volume(nodes, tets), v0, 1e-12);
+
+  const double sphere = 4 * M_PI / 3;
+  std::vector<Point3> grown = nodes;
+  const double offset = restore_volume(grown, tets, sphere, 0.5, 10);
+  EXPECT_NEAR(offset, std::cbrt(sphere / v0) - 1, 1e-9);
+  EXPECT_NEAR(total_volume(grown, tets), sphere, 1e-9);
+  EXPECT_EQ(grown[0], nodes[0]);  // the centre is no boundary node
+  for (int v = 1; v <= 12; ++v) EXPECT_NEAR(std::sqrt(grown[v][0] * grown[v][0] + grown[v][1] * grown[v][1] + grown[v][2] * grown[v][2]), 1 + offset, 1e-12);
+
+  // Held at the bound: a tenth of the offset needed.
+  const double bound = 0.1 * offset;
+  std::vector<Point3> held = nodes;
+  EXPECT_DOUBLE_EQ(restore_volume(held, tets, sphere, bound, 10), bound);
+  EXPECT_NEAR(total_volume(held, tets), v0 * std::pow(1 + bound, 3), 1e-12);
+  // With the inner node 90 % of the way to a face's centre, shrinking to half the volume moves that
+  // face past it and turns its element over: nothing moves.
+  std::vector<Point3> kept = nodes;
+  for (int k = 0; k < 3; ++k) kept[0][k] = 0.9 / 3 * (nodes[tets[0][1]][k] + nodes[tets[0][2]][k] + nodes[tets[0][3]][k]);
+  const std::vector<Point3> off_centre = kept;
+  EXPECT_EQ(restore_volume(kept, tets, 0.5 * v0, 0.5, 0), 0);
+  EXPECT_EQ(kept, off_centre);
+  // A smaller shrink leaves the face outside the node: it is made.
+  EXPECT_LT(restore_volume(kept, tets, 0.9 * v0, 0.5, 0), 0);
+  EXPECT_NEAR(total_volume(kept, tets), 0.9 * v0, 1e-9);
 }
 
 }  // namespace
