@@ -3,14 +3,19 @@
 #include <Eigen/Cholesky>
 
 #include <algorithm>
+#include <cstdio>
 #include <stdexcept>
+#include <string>
 
 namespace fetouch::haptics {
 
 HapticLoop::HapticLoop(const HapticLoopSettings& settings, const EnvironmentUpdate& initial)
     : settings_(settings),
       contacts_(static_cast<int>(initial.frames.size())),
-      local_model_(settings.local_model, contacts_) {
+      local_model_(settings.local_model, contacts_),
+      producer_model_(settings.local_model),
+      producer_hold_(settings.hold),
+      hold_(settings.hold) {
   if (contacts_ < 1) throw std::invalid_argument("HapticLoop: at least one contact");
   if (settings.ratio < 1) throw std::invalid_argument("HapticLoop: the ratio N must be at least 1");
   if (initial.compliance.rows() != 3 * contacts_ || initial.compliance.cols() != 3 * contacts_)
@@ -20,6 +25,8 @@ HapticLoop::HapticLoop(const HapticLoopSettings& settings, const EnvironmentUpda
   for (FrameSlot& slot : slots_) {
     slot.update = initial;
     slot.normal_force = Eigen::VectorXd::Zero(contacts_);
+    slot.local_model = settings.local_model;
+    slot.hold = settings.hold;
   }
   FrameSlot& first = slots_[newest_];
   first.gains = settings.gains;
@@ -45,8 +52,8 @@ void HapticLoop::prepare(FrameSlot& slot) const {
   slot.normal_compliance = normals.transpose() * slot.update.compliance * normals;
   if (!settings_.coupling) slot.normal_compliance = Eigen::MatrixXd(slot.normal_compliance.diagonal().asDiagonal());
   GainProblem problem;
-  problem.local_model = settings_.local_model;
-  problem.hold = settings_.hold;
+  problem.local_model = slot.local_model;
+  problem.hold = slot.hold;
   problem.ratio = settings_.ratio;
   problem.stiffness = Eigen::LDLT<Eigen::MatrixXd>(slot.normal_compliance).solve(Eigen::MatrixXd::Identity(m, m));
   if (slot.update.damping.size()) {
@@ -75,6 +82,13 @@ void HapticLoop::promote() noexcept {
   newest_arrival_ = tick_count_;
   const FrameSlot& slot = slots_[newest_];
   local_model_.set_compliance(slot.normal_compliance);
+  hold_ = slot.hold;
+  if (slot.local_model != local_model_.kind()) {  // a switch the producer accepted: its gains at once
+    local_model_.set_kind(slot.local_model);
+    local_model_.set_gains(slot.gains);
+    blend_left_ = 0;
+    return;
+  }
   if (slot.gains.proportional != local_model_.gains().proportional ||
       slot.gains.integral != local_model_.gains().integral) {
     blend_from_ = local_model_.gains();
@@ -111,15 +125,15 @@ const std::vector<ContactOutput>& HapticLoop::tick(const std::vector<Eigen::Vect
   local_model_.set_integrating(age < n);
   const FrameSlot& newest = slots_[newest_];
   const FrameSlot& previous = slots_[previous_];
-  const double t = hold_weight(settings_.hold, held_tick, n);
+  const double t = hold_weight(hold_, held_tick, n);
   for (int c = 0; c < contacts_; ++c) {
-    if (settings_.hold == HoldKind::zoh)
+    if (hold_ == HoldKind::zoh)
       held_[c] = newest.update.frames[c];
     else
       interpolate(previous.update.frames[c], newest.update.frames[c], t, held_[c]);
     penetration_(c) = locate(held_[c], devices[c]).penetration;
   }
-  apply_hold(settings_.hold, held_tick, n, newest.normal_force, previous.normal_force, reference_);
+  apply_hold(hold_, held_tick, n, newest.normal_force, previous.normal_force, reference_);
   const Eigen::VectorXd& force = local_model_.step(penetration_, zeros_, reference_);
   const Eigen::VectorXd& predicted = local_model_.predicted_penetration();
 
@@ -157,8 +171,58 @@ FrameSlot& HapticLoop::fill_answer(Environment& environment, const std::vector<C
   FrameSlot& slot = pending_slot();
   environment.solve(samples, frame, slot.update);
   for (int c = 0; c < contacts_; ++c) slot.normal_force(c) = samples[c].normal_force;
+  slot.local_model = producer_model_;
+  slot.hold = producer_hold_;
   prepare(slot);
+  consider_mode_switch(slot);
   return slot;
+}
+
+void HapticLoop::consider_mode_switch(FrameSlot& slot) {
+  ModeVerdict verdict;
+  if (!settings_.modes || !settings_.modes->take(verdict.request, verdict.local_model, verdict.hold)) return;
+  const auto mode = [](LocalModelKind model, HoldKind hold) { return std::string(to_string(model)) + " + " + to_string(hold); };
+  const std::string asked = mode(verdict.local_model, verdict.hold), kept = mode(producer_model_, producer_hold_);
+  char text[300];
+  if (verdict.local_model == producer_model_ && verdict.hold == producer_hold_) {
+    verdict.accepted = true;
+    verdict.gains = slot.gains;
+    verdict.spectral_radius = slot.selection.spectral_radius;
+    std::snprintf(text, sizeof text, "%s already", asked.c_str());
+    verdict.text = text;
+    settings_.modes->answer(verdict);
+    return;
+  }
+  const FrameSlot kept_slot_gains = slot;  // allocates: the producer's side
+  slot.local_model = verdict.local_model;
+  slot.hold = verdict.hold;
+  prepare(slot);
+  verdict.gains = slot.gains;
+  verdict.spectral_radius = slot.selection.spectral_radius;
+  verdict.accepted = slot.selection.stable;
+  const double margin = 100 * settings_.selection.margin;
+  if (verdict.accepted) {
+    producer_model_ = verdict.local_model;
+    producer_hold_ = verdict.hold;
+    std::snprintf(text, sizeof text, "%s from frame %ld: Kh %.4g N/m, N I %.4g N/m, robust spectral radius %.3f (K known within %.0f %%)",
+                  asked.c_str(), slot.update.frame + 1, slot.gains.proportional, settings_.ratio * slot.gains.integral,
+                  slot.selection.spectral_radius, margin);
+  } else {
+    if (settings_.schedule_gains)
+      std::snprintf(text, sizeof text,
+                    "refused %s: no gains robustly stable at this stiffness (the best found, Kh %.4g N/m, has a spectral "
+                    "radius of %.3f >= 1 with K known within %.0f %%); %s stays",
+                    asked.c_str(), slot.gains.proportional, slot.selection.spectral_radius, margin, kept.c_str());
+    else
+      std::snprintf(text, sizeof text,
+                    "refused %s: the scene's gains (Kh %.4g N/m, N I %.4g N/m) give it a spectral radius of %.3f >= 1 "
+                    "with K known within %.0f %%; %s stays",
+                    asked.c_str(), slot.gains.proportional, settings_.ratio * slot.gains.integral,
+                    slot.selection.spectral_radius, margin, kept.c_str());
+    slot = kept_slot_gains;
+  }
+  verdict.text = text;
+  settings_.modes->answer(verdict);
 }
 
 void LockstepSession::answer() {

@@ -16,7 +16,12 @@
 //
 // The producer side (prepare + publish: the solver thread at run time, the lockstep session here)
 // projects the new compliance on the normals and, with gain scheduling on, re-selects the gains
-// robustly (gain_selection.h), warm-started from the gains in use. tick() itself never allocates,
+// robustly (gain_selection.h), warm-started from the gains in use. A switch of local model and hold
+// asked through settings.modes is analysed there too, on the frame's stiffness: accepted only if
+// gains robustly stable for it exist (scheduling on) or the given gains are (off); the slot then
+// carries the new mode, which the tick applies at the frame's first tick with its gains at once
+// (no blend between two models; an integrator starts from zero, and one dropped takes its share
+// of the force with it: the safety layer's rate limit spreads that step). tick() itself never allocates,
 // locks, throws or waits; it swaps slot indices, never copies an update.
 #pragma once
 
@@ -31,6 +36,7 @@
 #include "haptics/hold.h"
 #include "haptics/local_model.h"
 #include "haptics/lock_free.h"
+#include "haptics/mode_channel.h"
 
 namespace fetouch::haptics {
 
@@ -49,6 +55,8 @@ struct HapticLoopSettings {
   bool coupling = true;
   double integrator_limit_n = 1e300;
   ForceSafetyLimits safety;
+  // Switches of local model and hold asked while running (mode_channel.h); none: the mode stays.
+  ModeChannel* modes = nullptr;
 };
 
 // One update as the loop holds it: the environment's answer plus what the producer derived.
@@ -58,6 +66,8 @@ struct FrameSlot {
   Eigen::VectorXd normal_force;       // F_c of the samples that produced it (the Smith reference)
   LocalModelGains gains;              // the gains for this stiffness
   GainSelection selection;            // how they were chosen (scheduling on)
+  LocalModelKind local_model = LocalModelKind::pi;  // the mode the gains are for: the tick takes
+  HoldKind hold = HoldKind::zoh;                    // it up with them when it differs
 };
 
 struct ContactOutput {
@@ -88,6 +98,7 @@ class HapticLoop {
   // frame's first tick each swap a slot index with the middle atomically, so the producer may run
   // in another thread. Publishing twice before a promotion replaces the first update.
   FrameSlot& pending_slot() { return slots_[back_]; }
+  // Fills the slot's compliance and gains for its mode (slot.local_model, slot.hold).
   void prepare(FrameSlot& slot) const;
   // All of the producer's part but publish(): the environment's answer to `samples` (those of
   // `frame`) into pending_slot(), the force that produced it (the Smith reference), prepare().
@@ -102,6 +113,9 @@ class HapticLoop {
   long ticks() const { return tick_count_; }
   const HapticLoopSettings& settings() const { return settings_; }
   const LocalModelGains& gains() const { return local_model_.gains(); }
+  // The mode the tick renders with (the tick's thread, or after it, as in lockstep).
+  LocalModelKind local_model() const { return local_model_.kind(); }
+  HoldKind hold() const { return hold_; }
   const FrameSlot& newest() const { return slots_[newest_]; }
   const ForceSafety& safety(int contact) const { return safety_[contact]; }
   // Frame starts at which no new answer was there (real time: the solve outlasted its frame), and
@@ -111,6 +125,8 @@ class HapticLoop {
 
  private:
   void promote() noexcept;
+  // A mode asked through settings_.modes, analysed on the pending slot's stiffness and answered.
+  void consider_mode_switch(FrameSlot& slot);
 
   HapticLoopSettings settings_;
   int contacts_;
@@ -120,6 +136,9 @@ class HapticLoop {
   int back_ = 2;                           // the producer's
   SlotExchange middle_{3};                 // exchanged
   LocalModelGains published_gains_;        // the producer's warm start
+  LocalModelKind producer_model_;          // the producer's mode: that of every slot it fills
+  HoldKind producer_hold_;
+  HoldKind hold_;                          // the tick's
   long tick_count_ = 0, newest_arrival_ = 0;
   long late_answers_ = 0, first_late_tick_ = -1;
   bool decimated_ = false;

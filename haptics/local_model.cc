@@ -32,6 +32,13 @@ LocalModel::LocalModel(LocalModelKind kind, int contacts)
       error_(Eigen::VectorXd::Zero(contacts)),
       rhs_(Eigen::VectorXd::Zero(contacts)) {}
 
+void LocalModel::set_kind(LocalModelKind kind) noexcept {
+  const bool had_integrator = has_integrator();
+  kind_ = kind;
+  if (has_integrator() && !had_integrator) integrator_.setZero();
+  refactor();
+}
+
 void LocalModel::set_gains(const LocalModelGains& gains) {
   gains_ = gains;
   refactor();

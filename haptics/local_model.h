@@ -57,6 +57,8 @@ class LocalModel {
   bool has_integrator() const { return haptics::has_integrator(kind_); }
   bool has_predictor() const { return haptics::has_predictor(kind_); }
 
+  // Another variant of the same size (real-time safe): an integrator it gains starts from zero.
+  void set_kind(LocalModelKind kind) noexcept;
   void set_gains(const LocalModelGains& gains);
   void set_compliance(const Eigen::MatrixXd& compliance);  // W, for the Smith variants
   void set_integrator_limit(double limit) { integrator_limit_ = limit; }

@@ -48,6 +48,7 @@ TrainerSession::TrainerSession(const config::Scene& scene, const TrainerOptions&
     : scene_(scene) {
   scene_.mesh = mesh_scene_volume(scene_.mesh);
   settings_.loop = loop_settings(scene_);
+  settings_.loop.modes = &modes_;
   log::info() << "building the tissue model of " << scene_.name;
   model_ = fem::build_tissue_model(scene_);
   fem::TissueModel* model = model_.get();

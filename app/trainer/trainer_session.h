@@ -6,6 +6,7 @@
 //   - the probes: every tick, through SessionMonitor::probes (device point, proxy, force);
 //   - mouse probes: a CursorOperator (haptics/devices.h) per probe the mouse drives; the window
 //     moves its target;
+//   - switches of local model and hold, through a haptics::ModeChannel the loop's producer answers;
 //   - pause (no tick runs: simulated time stands still) and stop (forces ramp out over 0.2 s).
 // A session is one take: reset and record start a new one (the window builds another).
 #pragma once
@@ -78,6 +79,10 @@ class TrainerSession {
   const MeshView& mesh() const { return mesh_; }
   const config::Scene& scene() const { return scene_; }
   const haptics::HapticLoopSettings& loop() const { return settings_.loop; }
+  // A switch of local model and hold: analysed by the solver thread on its next frame's stiffness,
+  // applied at the frame after if the analysis accepts it (haptics/mode_channel.h).
+  long ask_mode(haptics::LocalModelKind model, haptics::HoldKind hold) { return modes_.ask(model, hold); }
+  haptics::ModeVerdict mode_verdict() const { return modes_.verdict(); }
   // The newest tissue state, when one came since the last call (the window's thread only).
   bool take_snapshot() { return snapshots_.take(); }
   const TissueSnapshot& snapshot() const { return snapshots_.front(); }
@@ -93,6 +98,7 @@ class TrainerSession {
   config::Scene scene_;
   SessionSettings settings_;
   SessionMonitor monitor_;
+  haptics::ModeChannel modes_;
   std::unique_ptr<fem::TissueModel> model_;  // its mesh and materials, which the solver refers to
   std::unique_ptr<haptics::Environment> environment_;
   std::vector<std::unique_ptr<haptics::Device>> devices_;

@@ -2,6 +2,7 @@
 
 #include <QAction>
 #include <QApplication>
+#include <QComboBox>
 #include <QHBoxLayout>
 #include <QImage>
 #include <QKeyEvent>
@@ -22,6 +23,7 @@
 #include <cmath>
 #include <sstream>
 
+#include "app/scene_devices.h"
 #include "app/trainer/trace_plot.h"
 #include "app/trainer/ultrasound_volume.h"
 #include "haptics/local_model.h"
@@ -95,6 +97,35 @@ TrainerWindow::TrainerWindow(const config::Scene& scene, const TrainerOptions& s
   action("Colour", QKeySequence(Qt::Key_C), [this] { toggle_colour_field(); });
   action("Plane", QKeySequence(Qt::Key_O), [this] { toggle_plane(); });
   action("Camera", QKeySequence(Qt::Key_V), [this] { reset_camera(); });
+  // Local model and hold: a choice is asked of the session, whose stability analysis accepts it
+  // (with gains re-selected) or refuses it (the boxes go back, the reason on the message line).
+  {
+    const haptics::HapticLoopSettings scene_loop = loop_settings(scene_);
+    model_ = asked_model_ = scene_loop.local_model, hold_ = asked_hold_ = scene_loop.hold;
+  }
+  model_box_ = new QComboBox(this);
+  for (const auto kind : {haptics::LocalModelKind::p, haptics::LocalModelKind::pi, haptics::LocalModelKind::smith,
+                          haptics::LocalModelKind::pi_smith})
+    model_box_->addItem(haptics::to_string(kind), static_cast<int>(kind));
+  model_box_->setToolTip("local model (M: the next one)");
+  hold_box_ = new QComboBox(this);
+  for (const auto kind : {haptics::HoldKind::zoh, haptics::HoldKind::foh}) hold_box_->addItem(haptics::to_string(kind), static_cast<int>(kind));
+  hold_box_->setToolTip("hold (H: the other one)");
+  show_mode();
+  bar->addWidget(model_box_);
+  bar->addWidget(hold_box_);
+  const auto asked_from_boxes = [this](int) {
+    ask_mode(static_cast<haptics::LocalModelKind>(model_box_->currentData().toInt()),
+             static_cast<haptics::HoldKind>(hold_box_->currentData().toInt()));
+  };
+  connect(model_box_, QOverload<int>::of(&QComboBox::activated), this, asked_from_boxes);
+  connect(hold_box_, QOverload<int>::of(&QComboBox::activated), this, asked_from_boxes);
+  action("Model", QKeySequence(Qt::Key_M), [this] {
+    ask_mode(static_cast<haptics::LocalModelKind>((static_cast<int>(asked_model_) + 1) % 4), asked_hold_);
+  });
+  action("Hold", QKeySequence(Qt::Key_H), [this] {
+    ask_mode(asked_model_, asked_hold_ == haptics::HoldKind::zoh ? haptics::HoldKind::foh : haptics::HoldKind::zoh);
+  });
   action("Quit", QKeySequence(Qt::CTRL | Qt::Key_Q), [this] { close(); });
 
   resize(1280, 800);
@@ -155,7 +186,17 @@ void TrainerWindow::start_take(const std::optional<std::filesystem::path>& recor
   if (recording) text += "recording to " + recording->string();
   message_->setText(QString::fromStdString(text));
   ++takes_;
+  mode_request_ = 0;
   session_->start();
+  // A new take starts in the scene's mode; one chosen since is asked again (and analysed again).
+  const haptics::HapticLoopSettings& scene_loop = session_->loop();
+  if (model_ != scene_loop.local_model || hold_ != scene_loop.hold) {
+    const haptics::LocalModelKind model = model_;
+    const haptics::HoldKind hold = hold_;
+    model_ = asked_model_ = scene_loop.local_model, hold_ = asked_hold_ = scene_loop.hold;
+    show_mode();
+    ask_mode(model, hold);
+  }
 }
 
 void TrainerWindow::tick() {
@@ -163,11 +204,10 @@ void TrainerWindow::tick() {
     if (window_options_.headless) close();
     return;
   }
-  bool changed = false;
+  take_mode_verdict();
   if (session_->take_snapshot()) {
     shown_ = session_->snapshot();
     view_->update_tissue(shown_, field_);
-    changed = true;
     if (shown_.frame != last_frame_) {
       ++frames_seen_;
       if (shown_.solve_s > session_->solver_period_s()) ++overruns_;
@@ -182,7 +222,6 @@ void TrainerWindow::tick() {
     view_->update_probes(p, probes);
     const double t = monitor.ticks.load() * session_->loop().period_s;
     for (int i = 0; i < probes && i < SessionMonitor::kMaxDevices; ++i) force_plot_->add(i, t, p[i].force.norm());
-    changed = true;
   }
   // The image plane follows the probe at the window's rate (through its proxy on the surface while
   // it touches, else through its patch), the tissue in it at the solver's: a new image when either
@@ -239,7 +278,7 @@ void TrainerWindow::update_status() {
   s.precision(2);
   s << (session_->paused() ? "PAUSED  " : session_->running() ? "" : "ENDED  ") << "t " << monitor.ticks.load() * loop.period_s
     << " s   haptic " << std::lround(haptic_hz_) << " Hz   solver " << std::lround(solver_hz_) << " Hz   "
-    << haptics::to_string(loop.local_model) << " / " << haptics::to_string(loop.hold) << "   Kp " << std::lround(shown_.proportional_gain)
+    << haptics::to_string(model_) << " / " << haptics::to_string(hold_) << "   Kp " << std::lround(shown_.proportional_gain)
     << " Ki " << std::lround(shown_.integral_gain) << "   margin " << shown_.stability_margin << "   late ticks "
     << monitor.late_ticks.load() << "   overruns " << overruns_ << "   ultrasound " << std::lround(ultrasound_hz_) << " img/s";
   if (session_->cursor()) s << "   mouse: shift+move, shift+wheel or [ ] to push";
@@ -277,6 +316,34 @@ void TrainerWindow::toggle_colour_field() {
 }
 
 void TrainerWindow::toggle_plane() { lateral_x_ = !lateral_x_; }
+
+void TrainerWindow::ask_mode(haptics::LocalModelKind model, haptics::HoldKind hold) {
+  if (!session_) return;
+  mode_request_ = session_->ask_mode(model, hold);
+  asked_model_ = model, asked_hold_ = hold;  // M and H before the answer build on this request
+  message_->setStyleSheet("");
+  message_->setText(QString("asked for %1 + %2: the stability analysis runs on the next frame")
+                        .arg(haptics::to_string(model), haptics::to_string(hold)));
+}
+
+void TrainerWindow::take_mode_verdict() {
+  if (mode_request_ == 0) return;
+  const haptics::ModeVerdict verdict = session_->mode_verdict();
+  if (verdict.request != mode_request_) return;  // not answered yet (or an older request's answer)
+  mode_request_ = 0;
+  if (verdict.accepted) model_ = verdict.local_model, hold_ = verdict.hold;
+  asked_model_ = model_, asked_hold_ = hold_;
+  message_->setStyleSheet(verdict.accepted ? "" : "color: #c00000");
+  message_->setText(QString::fromStdString(verdict.text));
+  show_mode();
+}
+
+void TrainerWindow::show_mode() {
+  model_box_->setCurrentIndex(model_box_->findData(static_cast<int>(model_)));
+  hold_box_->setCurrentIndex(hold_box_->findData(static_cast<int>(hold_)));
+}
+
+std::string TrainerWindow::message() const { return message_->text().toStdString(); }
 
 void TrainerWindow::reset_camera() {
   if (!view_) return;

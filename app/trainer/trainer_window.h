@@ -17,6 +17,7 @@
 #include "app/trainer/tissue_view.h"
 #include "app/trainer/trainer_session.h"
 
+class QComboBox;
 class QLabel;
 class QTimer;
 class QVTKOpenGLNativeWidget;
@@ -56,6 +57,12 @@ class TrainerWindow : public QMainWindow {
   void toggle_colour_field();
   void toggle_plane();
   void reset_camera();
+  // Asks the session for another local model and hold; the answer comes on the message line
+  // (applied, or refused with the reason) within a frame or two.
+  void ask_mode(haptics::LocalModelKind model, haptics::HoldKind hold);
+  haptics::LocalModelKind local_model() const { return model_; }  // the mode in force, as last answered
+  haptics::HoldKind hold() const { return hold_; }
+  std::string message() const;  // the message line
   void move_cursor_along_view(double metres);
   const std::vector<std::uint8_t>& ultrasound_image() const { return image_; }
   const std::vector<float>& ultrasound_reference() const { return reference_; }
@@ -73,6 +80,8 @@ class TrainerWindow : public QMainWindow {
   void tick();
   void update_ultrasound(const Eigen::Vector3d& point, const Eigen::Vector3d& normal);
   void update_status();
+  void take_mode_verdict();
+  void show_mode();
   void set_cursor_at_display(double x, double y);
 
   config::Scene scene_;
@@ -90,6 +99,12 @@ class TrainerWindow : public QMainWindow {
   QLabel *ultrasound_ = nullptr, *status_ = nullptr, *message_ = nullptr;
   TracePlot *force_plot_ = nullptr, *frame_plot_ = nullptr;
   QTimer* timer_ = nullptr;
+  QComboBox *model_box_ = nullptr, *hold_box_ = nullptr;
+  haptics::LocalModelKind model_ = haptics::LocalModelKind::pi;
+  haptics::HoldKind hold_ = haptics::HoldKind::zoh;
+  haptics::LocalModelKind asked_model_ = haptics::LocalModelKind::pi;  // the newest asked (the mode in force when
+  haptics::HoldKind asked_hold_ = haptics::HoldKind::zoh;              // none is pending)
+  long mode_request_ = 0;  // the newest asked of this take's session (0: none)
   ColourField field_ = ColourField::displacement;
   bool lateral_x_ = true;
   Eigen::Vector3d cursor_ = Eigen::Vector3d::Zero();

@@ -1,7 +1,8 @@
 // The trainer window's controls driven by QTest (label gui, under Xvfb): pause stops simulated
 // time (the tick count does not grow), reset returns the tissue to rest (displacement 0 in the
-// snapshot), record writes a take that `fetouch replay` accepts, and keys move the mouse probe's
-// cursor into the tissue so that its force rises with depth.
+// snapshot), record writes a take that `fetouch replay` accepts, switching the local model and
+// hold with the keys is applied with robust gains or refused with the reason on screen, and keys
+// move the mouse probe's cursor into the tissue so that its force rises with depth.
 #include <gtest/gtest.h>
 #include <unistd.h>
 #include <QApplication>
@@ -13,7 +14,10 @@
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
+#include <fstream>
 #include <memory>
+#include <regex>
+#include <sstream>
 
 #include "app/scene_mesh.h"
 #include "app/trainer/trainer_window.h"
@@ -120,6 +124,56 @@ TEST_F(TrainerWindowTest, TheMouseProbeFollowsTheCursorIntoTheTissue) {
   std::printf("force with the cursor 4 mm and 8 mm below the surface: %.3f N, %.3f N\n", shallow, deep);
   EXPECT_GT(shallow, 0.01);
   EXPECT_GT(deep, shallow * 1.2) << "the force rises with depth";
+}
+
+// M and H ask for the next local model and the other hold. On the default scene (gains chosen
+// robustly every frame) P + FOH is accepted, and the window then shows it and renders with gains
+// the analysis accepted (margin > 0 in the next frames). With the scene's gains fixed at Kh = 1000
+// N/m and N I = 100 N/m, which PI + Smith renders robustly stable on any stiffness of 10 to 300 N/m
+// (spectral radius 0.91 to 0.93, tests/haptics/test_mode_switch.cc checks the like) and plain PI
+// does not (radius 1.2 to 133), asking for PI is refused, and the message line says why.
+TEST_F(TrainerWindowTest, SwitchingTheLocalModelIsAppliedOrRefusedWithTheReason) {
+  app::trainer::WindowOptions options;
+  options.out = out_;
+  {
+    TrainerWindow w(scene("fetus_phantom.yaml"), {}, options);
+    w.show();
+    QApplication::setActiveWindow(&w);
+    ASSERT_EQ(w.local_model(), haptics::LocalModelKind::pi_smith);
+    QTest::qWait(500);
+    QTest::keyClick(&w, Qt::Key_M);  // pi_smith -> p
+    QTest::keyClick(&w, Qt::Key_H);  // zoh -> foh
+    QTest::qWait(1200);
+    EXPECT_EQ(w.local_model(), haptics::LocalModelKind::p) << w.message();
+    EXPECT_EQ(w.hold(), haptics::HoldKind::foh) << w.message();
+    EXPECT_NE(w.message().find("p + foh from frame"), std::string::npos) << w.message();
+    QTest::qWait(500);
+    EXPECT_GT(w.shown().stability_margin, 0);
+  }
+  // The default scene with its gains fixed.
+  std::ifstream in(fs::path(FETOUCH_SOURCE_DIR) / "config" / "scenes" / "fetus_phantom.yaml");
+  std::stringstream text;
+  text << in.rdbuf();
+  const fs::path scenes = fs::path(FETOUCH_SOURCE_DIR) / "config" / "scenes";
+  const std::string fixed = std::regex_replace(
+      std::regex_replace(text.str(), std::regex("gains: auto"), "gains: {proportional_n_per_m: 1000, integral_n_per_m: 2}"),
+      std::regex("trajectories/"), (scenes / "trajectories").string() + "/");
+  ASSERT_NE(fixed, text.str());
+  fs::create_directories(out_);
+  const fs::path file = out_ / "fixed_gains.yaml";
+  std::ofstream(file) << fixed;
+  std::optional<config::Scene> s = app::load_scene_or_report(file.string());
+  ASSERT_TRUE(s);
+  TrainerWindow w(*s, {}, options);
+  w.show();
+  QApplication::setActiveWindow(&w);
+  QTest::qWait(500);
+  w.ask_mode(haptics::LocalModelKind::pi, haptics::HoldKind::zoh);
+  QTest::qWait(1200);
+  EXPECT_EQ(w.local_model(), haptics::LocalModelKind::pi_smith);
+  EXPECT_NE(w.message().find("refused pi + zoh: the scene's gains"), std::string::npos) << w.message();
+  EXPECT_NE(w.message().find("pi_smith + zoh stays"), std::string::npos) << w.message();
+  std::printf("%s\n", w.message().c_str());
 }
 
 }  // namespace

@@ -1,6 +1,7 @@
 // The haptic tick never allocates (ARCHITECTURE.md section 5). A counting replacement of the global
 // operator new, armed only around tick() calls, proves it for every local model and hold, with
-// several contacts, FOH interpolation, gain blending and unilateral contact changes included. The
+// several contacts, FOH interpolation, gain blending, switches of model and hold and unilateral
+// contact changes included. The
 // environment's solve and the gain selection run outside the armed window: they are the producer
 // side of the hand-over, which may allocate.
 #include <gtest/gtest.h>
@@ -40,10 +41,12 @@ namespace fetouch::haptics {
 namespace {
 
 long count_tick_allocations(LocalModelKind kind, HoldKind hold, int contacts) {
+  ModeChannel modes;
   HapticLoopSettings settings;
   settings.local_model = kind;
   settings.hold = hold;
   settings.blend_ticks = 20;
+  settings.modes = &modes;
   std::vector<ContactFrame> rest(contacts);
   for (int c = 0; c < contacts; ++c) {
     rest[c].point = {0.015 * c, 0.002 * c, 0};
@@ -61,6 +64,10 @@ long count_tick_allocations(LocalModelKind kind, HoldKind hold, int contacts) {
     for (int c = 0; c < contacts; ++c)  // in and out of contact, at different times per contact
       devices[c] = rest[c].point + Eigen::Vector3d(0.001, 0, 0.001 - 0.004 * std::sin(0.004 * k + c));
     if (k == 50 * 12) environment.set_stiffness(k0 * 2.5);  // new gains to blend in
+    if (k % (50 * 3) == 25 && k > 50 * 15) {  // a switch to every other mode in turn, taken up by the tick
+      const int next = (k / (50 * 3)) % 8;
+      modes.ask(static_cast<LocalModelKind>(next / 2), static_cast<HoldKind>(next % 2));
+    }
     allocations = 0;
     armed = true;
     loop.tick(devices);
