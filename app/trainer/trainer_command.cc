@@ -101,6 +101,30 @@ int run_trainer(const TrainerCommandOptions& o) {
     json.key("renders").value(f.renders);
     json.key("wall_s").value(f.wall_s);
     json.key("screenshot").value(o.screenshot);
+    if (!f.ultrasound_png.empty()) {
+      const auto vector = [&json](const Eigen::Vector3d& v) {
+        json.begin_array();
+        for (int c = 0; c < 3; ++c) json.value(v[c]);
+        json.end_array();
+      };
+      json.key("ultrasound_view").begin_object();
+      json.key("image").value(f.ultrasound_png.string());
+      json.key("tissue").value(f.tissue_vtu.string());
+      json.key("frame").value(f.frame);
+      json.key("volume").value(f.volume);
+      json.key("gain").value(f.gain);
+      json.key("centre_m");
+      vector(f.plane.centre);
+      json.key("lateral");
+      vector(f.plane.lateral);
+      json.key("up");
+      vector(f.plane.up);
+      json.key("width_m").value(f.plane.width_m);
+      json.key("height_m").value(f.plane.height_m);
+      json.key("columns").value(static_cast<long>(f.plane.columns));
+      json.key("rows").value(static_cast<long>(f.plane.rows));
+      json.end_object();
+    }
     json.end_object();
     std::cout << "\n";
   } else {
@@ -109,7 +133,9 @@ int run_trainer(const TrainerCommandOptions& o) {
                 s.ticks, s.frames, 1e3 * s.solve_p99_s, 1e6 * s.timing.lateness_p99_s, 1e6 * s.timing.lateness_max_s,
                 s.timing.tick_overruns, s.timing.frame_overruns, s.timing.skipped_frames);
     std::printf("  ultrasound: %ld images of 256 x 256, %.1f ms each; %ld renders\n", f.ultrasound_images, image_ms, f.renders);
-    if (!o.screenshot.empty()) std::printf("  wrote %s\n", o.screenshot.c_str());
+    if (!o.screenshot.empty())
+      std::printf("  wrote %s, %s (the ultrasound image) and %s (the tissue shown)\n", o.screenshot.c_str(),
+                  f.ultrasound_png.c_str(), f.tissue_vtu.c_str());
   }
   return kExitOk;
 }

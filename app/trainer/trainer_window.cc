@@ -26,6 +26,7 @@
 #include "app/scene_devices.h"
 #include "app/trainer/trace_plot.h"
 #include "app/trainer/ultrasound_volume.h"
+#include "app/trainer/view_export.h"
 #include "haptics/local_model.h"
 
 namespace fetouch::app::trainer {
@@ -242,8 +243,12 @@ void TrainerWindow::tick() {
   update_status();
   if (!session_->running() && window_options_.headless) {
     figures_.error = session_->error();
-    if (window_options_.screenshot && figures_.error.empty() && !save_screenshot(*window_options_.screenshot))
-      figures_.error = "cannot write the screenshot " + window_options_.screenshot->string();
+    if (window_options_.screenshot && figures_.error.empty()) {
+      if (!save_screenshot(*window_options_.screenshot))
+        figures_.error = "cannot write the screenshot " + window_options_.screenshot->string();
+      else
+        export_views(*window_options_.screenshot);
+    }
     figures_.wall_s = seconds_since(started_);
     timer_->stop();
     close();
@@ -283,6 +288,25 @@ void TrainerWindow::update_status() {
     << monitor.late_ticks.load() << "   overruns " << overruns_ << "   ultrasound " << std::lround(ultrasound_hz_) << " img/s";
   if (session_->cursor()) s << "   mouse: shift+move, shift+wheel or [ ] to push";
   status_->setText(QString::fromStdString(s.str()));
+}
+
+void TrainerWindow::export_views(const std::filesystem::path& screenshot) {
+  std::filesystem::path stem = screenshot;
+  stem.replace_extension();
+  try {
+    // The image made again from the tissue shown, in the plane shown: the pair is consistent even
+    // if the last frame came after the last image.
+    std::vector<std::uint8_t> image;
+    std::vector<float> reference;
+    slicer_->slice(shown_.displacement, plane_, volume_.empty() ? nullptr : &volume_, gain_, image, reference);
+    figures_.ultrasound_png = stem.string() + ".ultrasound.png";
+    figures_.tissue_vtu = stem.string() + ".vtu";
+    write_grey_png(image, plane_.columns, plane_.rows, figures_.ultrasound_png);
+    write_tissue_vtu(session_->mesh(), shown_.displacement, figures_.tissue_vtu);
+    figures_.plane = plane_, figures_.gain = gain_, figures_.volume = !volume_.empty(), figures_.frame = shown_.frame;
+  } catch (const std::exception& e) {
+    figures_.error = e.what();
+  }
 }
 
 bool TrainerWindow::save_screenshot(const std::filesystem::path& file) {

@@ -41,6 +41,14 @@ struct WindowFigures {
   double wall_s = 0;
   long renders = 0;
   std::string error;
+  // Beside --screenshot OUT.png: OUT.ultrasound.png, the ultrasound image of the tissue shown at the
+  // end (`frame`), in `plane`, the volume scaled by `gain` (none: the cross-section), and OUT.vtu,
+  // that tissue (view_export.h).
+  std::filesystem::path ultrasound_png, tissue_vtu;
+  SlicePlane plane;
+  double gain = 1;
+  bool volume = false;
+  long frame = -1;
 };
 
 class TrainerWindow : public QMainWindow {
@@ -83,6 +91,7 @@ class TrainerWindow : public QMainWindow {
   void take_mode_verdict();
   void show_mode();
   void set_cursor_at_display(double x, double y);
+  void export_views(const std::filesystem::path& screenshot);
 
   config::Scene scene_;
   TrainerOptions session_options_;

@@ -1,0 +1,22 @@
+// What the trainer's views showed, in files other tools open: the tissue as shown (a .vtu of the
+// reference mesh with the displacement the 3D view and the ultrasound image were made from) and the
+// ultrasound image at its own resolution (an 8-bit grey PNG). `fetouch trainer --screenshot` writes
+// both beside the screenshot, so that a bug report, a doc figure or a test can redo the image.
+#pragma once
+
+#include <cstdint>
+#include <filesystem>
+#include <vector>
+
+#include "app/trainer/trainer_session.h"
+
+namespace fetouch::app::trainer {
+
+// Points (the reference mesh), linear tetrahedra, point data `displacement` (m) and cell data
+// `material_id`. Throws std::runtime_error naming the file if it cannot be written.
+void write_tissue_vtu(const MeshView& mesh, const std::vector<float>& displacement, const std::filesystem::path& file);
+
+// Row 0 on top. Throws std::runtime_error naming the file if it cannot be written.
+void write_grey_png(const std::vector<std::uint8_t>& image, int columns, int rows, const std::filesystem::path& file);
+
+}  // namespace fetouch::app::trainer
