@@ -9,9 +9,11 @@
 #include <QSurfaceFormat>
 #include <QTest>
 #include <QVTKOpenGLNativeWidget.h>
+#include <yaml-cpp/yaml.h>
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -19,6 +21,7 @@
 #include <regex>
 #include <sstream>
 
+#include "app/recording.h"
 #include "app/scene_mesh.h"
 #include "app/trainer/trainer_window.h"
 #include "tests/support/run_command.h"
@@ -102,6 +105,21 @@ TEST_F(TrainerWindowTest, PauseStopsTimeResetReturnsToRestRecordReplays) {
   EXPECT_EQ(replay.exit_code, 0) << replay.err;
 }
 
+// The displacement along -n of the patch at `patch` under a force f along -n, by `fetouch solve`.
+double static_depth(const fs::path& scene, const Eigen::Vector3d& patch, const Eigen::Vector3d& n, double f, const fs::path& out) {
+  char press[300];
+  std::snprintf(press, sizeof press, " --press %.17g %.17g %.17g %.17g %.17g %.17g", patch.x(), patch.y(), patch.z(),
+                -f * n.x(), -f * n.y(), -f * n.z());
+  const auto s = run_command(fetouch("solve --json --out " + out.string() + " " + scene.string() + press));
+  EXPECT_EQ(s.exit_code, 0) << s.err;
+  const YAML::Node u = YAML::Load(s.out)["probes"][0]["displacement_m"];
+  return -(u[0].as<double>() * n.x() + u[1].as<double>() * n.y() + u[2].as<double>() * n.z());
+}
+
+// The mouse probe in a recorded take: the cursor pushed 4 mm, then 8 mm, below the surface and held.
+// The force rises with depth, and once settled it is what a static `fetouch solve` needs to hold the
+// patch at the depth the recording shows (within 10 %): the static force for that depth is found by
+// two solves (the held force, then the secant's next guess) and interpolated between them.
 TEST_F(TrainerWindowTest, TheMouseProbeFollowsTheCursorIntoTheTissue) {
   app::trainer::TrainerOptions session;
   session.mouse = true;
@@ -110,8 +128,12 @@ TEST_F(TrainerWindowTest, TheMouseProbeFollowsTheCursorIntoTheTissue) {
   TrainerWindow w(scene("fetus_phantom.yaml"), session, options);
   w.show();
   QApplication::setActiveWindow(&w);
-  ASSERT_TRUE(w.session() && w.session()->cursor());
+  w.toggle_recording();  // a take from rest, recorded
+  ASSERT_TRUE(w.session() && w.session()->cursor() && w.recording());
+  const fs::path take = *w.recording();
   QTest::qWait(300);
+  ASSERT_FALSE(w.shown().patch_centre.empty());
+  const Eigen::Vector3d patch = w.shown().patch_centre[0], n = w.shown().patch_normal[0];  // at rest; n outward
   const auto force = [&w] { return w.session()->monitor().force_n[0].load(); };
   EXPECT_LT(force(), 1e-6) << "the cursor starts 1 cm above the tissue";
   // Push the cursor down (the probe's patch normal points up here) 14 mm, then 4 mm more.
@@ -119,11 +141,34 @@ TEST_F(TrainerWindowTest, TheMouseProbeFollowsTheCursorIntoTheTissue) {
   QTest::qWait(1500);
   const double shallow = force();
   w.set_cursor(w.cursor() - Eigen::Vector3d(0, 0, 0.004));
-  QTest::qWait(1500);
+  QTest::qWait(2000);
   const double deep = force();
+  w.toggle_recording();  // ends the take (and starts an unrecorded one)
   std::printf("force with the cursor 4 mm and 8 mm below the surface: %.3f N, %.3f N\n", shallow, deep);
   EXPECT_GT(shallow, 0.01);
   EXPECT_GT(deep, shallow * 1.2) << "the force rises with depth";
+
+  // Settled: 0.3 s before the stop's 0.2 s ramp-out at the end of the take.
+  const app::Recording recording = app::read_recording(take);
+  const auto& samples = recording.devices.at(0).samples;
+  ASSERT_GT(samples.size(), 1000u);
+  double held_force = 0, depth = 0, lowest = 1e300, highest = 0;
+  const std::size_t last = 300, end = samples.size() - 300;
+  for (std::size_t k = end - last; k < end; ++k) {
+    held_force += samples[k].normal_force / last;
+    depth += -(samples[k].position - patch).dot(n) / last;
+    lowest = std::min(lowest, samples[k].normal_force), highest = std::max(highest, samples[k].normal_force);
+  }
+  EXPECT_LT(highest - lowest, 0.02 * held_force) << "settled";
+  const fs::path scene_file = fs::path(FETOUCH_SOURCE_DIR) / "config" / "scenes" / "fetus_phantom.yaml";
+  const double d1 = static_depth(scene_file, patch, n, held_force, out_ / "solve1");
+  const double f2 = held_force * depth / d1;
+  const double d2 = static_depth(scene_file, patch, n, f2, out_ / "solve2");
+  const double needed = held_force + (f2 - held_force) * (depth - d1) / (d2 - d1);
+  std::printf("held %.2f mm deep with %.4f N; fetouch solve: %.2f mm under %.4f N, %.2f mm under %.4f N: %.4f N needed (%+.1f %%)\n",
+              1e3 * depth, held_force, 1e3 * d1, held_force, 1e3 * d2, f2, needed, 100 * (held_force / needed - 1));
+  EXPECT_GT(depth, 5e-3);
+  EXPECT_NEAR(held_force / needed, 1, 0.10);
 }
 
 // M and H ask for the next local model and the other hold. On the default scene (gains chosen
