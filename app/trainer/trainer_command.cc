@@ -65,7 +65,7 @@ int run_trainer(const TrainerCommandOptions& o) {
   window.headless = o.duration_s > 0;
   std::unique_ptr<trainer::TrainerWindow> w;
   try {
-    w = std::make_unique<trainer::TrainerWindow>(*loaded, session, window);
+    w = std::make_unique<trainer::TrainerWindow>(*loaded, session, window, o.scene);
   } catch (const std::exception& e) {
     std::cerr << "error: " << o.scene << ": " << e.what() << "\n";
     return kExitBadInput;
@@ -152,7 +152,8 @@ void add_trainer_command(CLI::App& parent, int& exit_code) {
       "the mouse: shift+move moves the cursor in the view plane, shift+wheel or [ and ] push it along\n"
       "the view; the probe follows through a spring, so its lag is the force. Keys: space pause, R\n"
       "reset, ctrl+R record a take (DIR/take-N.h5, replayable with `fetouch replay --trajectory`),\n"
-      "ctrl+S screenshot, C colour field, O image plane, V camera. With --duration it runs that long,\n"
+      "ctrl+S screenshot, C colour field, O image plane, V camera, M local model and H hold (applied\n"
+      "if the stability analysis accepts them), ctrl+O open a scene. With --duration it runs that long,\n"
       "writes --screenshot and exits (docs, tests, bug reports). Needs a display: xvfb-run -a.");
   cmd->add_option("scene", o->scene, "Scene file (.yaml)")->required()->check(CLI::ExistingFile);
   cmd->add_option("--trajectory", o->trajectory, "The first probe's trajectory instead of the scene's (CSV t,x,y,z or a recording .h5)")

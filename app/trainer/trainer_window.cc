@@ -3,6 +3,7 @@
 #include <QAction>
 #include <QApplication>
 #include <QComboBox>
+#include <QFileDialog>
 #include <QHBoxLayout>
 #include <QImage>
 #include <QKeyEvent>
@@ -27,6 +28,7 @@
 #include "app/trainer/trace_plot.h"
 #include "app/trainer/ultrasound_volume.h"
 #include "app/trainer/view_export.h"
+#include "config/scene_loader.h"
 #include "haptics/local_model.h"
 
 namespace fetouch::app::trainer {
@@ -42,8 +44,9 @@ double seconds_since(std::chrono::steady_clock::time_point t) {
 
 }  // namespace
 
-TrainerWindow::TrainerWindow(const config::Scene& scene, const TrainerOptions& session, const WindowOptions& window)
-    : scene_(scene), session_options_(session), window_options_(window) {
+TrainerWindow::TrainerWindow(const config::Scene& scene, const TrainerOptions& session, const WindowOptions& window,
+                             std::filesystem::path scene_path)
+    : scene_(scene), session_options_(session), window_options_(window), scene_path_(std::move(scene_path)) {
   setWindowTitle(QString::fromStdString("Fetouch trainer: " + scene.name));
   volume_ = scene_ultrasound(scene_, gain_, volume_description_);
 
@@ -67,11 +70,14 @@ TrainerWindow::TrainerWindow(const config::Scene& scene, const TrainerOptions& s
   force_plot_ = new TracePlot("force per probe (last 5 s)", "N", 5.0, this);
   frame_plot_ = new TracePlot("solver frame time (last 5 s)", "ms", 5.0, this);
   frame_plot_->set_series(1);
+  margin_plot_ = new TracePlot("stability margin per frame (last 5 s; > 0: robustly stable)", "", 5.0, this);
+  margin_plot_->set_series(1);
   auto* side = new QWidget(this);
   auto* column = new QVBoxLayout(side);
   column->addWidget(ultrasound_, 3);
   column->addWidget(force_plot_, 1);
   column->addWidget(frame_plot_, 1);
+  column->addWidget(margin_plot_, 1);
   auto* split = new QSplitter(this);
   split->addWidget(vtk_widget_);
   split->addWidget(side);
@@ -88,6 +94,11 @@ TrainerWindow::TrainerWindow(const config::Scene& scene, const TrainerOptions& s
     a->setShortcut(key);
     connect(a, &QAction::triggered, this, f);
   };
+  action("Open", QKeySequence(Qt::CTRL | Qt::Key_O), [this] {
+    const QString file = QFileDialog::getOpenFileName(this, "Open a scene", QString::fromStdString(scene_path_.parent_path().string()),
+                                                      "Scenes (*.yaml *.yml)");
+    if (!file.isEmpty()) open_scene(file.toStdString());
+  });
   action("Pause", QKeySequence(Qt::Key_Space), [this] { toggle_pause(); });
   action("Reset", QKeySequence(Qt::Key_R), [this] { reset(); });
   action("Record", QKeySequence(Qt::CTRL | Qt::Key_R), [this] { toggle_recording(); });
@@ -170,6 +181,8 @@ void TrainerWindow::start_take(const std::optional<std::filesystem::path>& recor
   force_plot_->clear();
   frame_plot_->clear();
   frame_plot_->set_limit(1e3 * session_->solver_period_s(), "budget");
+  margin_plot_->clear();
+  margin_plot_->set_limit(0, "unstable below");
   last_frame_ = -2, frames_seen_ = 0, overruns_ = 0, imaged_frame_ = -3;
   session_->want_stress(field_ == ColourField::von_mises);
   if (session_->take_snapshot()) shown_ = session_->snapshot();
@@ -213,6 +226,7 @@ void TrainerWindow::tick() {
       ++frames_seen_;
       if (shown_.solve_s > session_->solver_period_s()) ++overruns_;
       frame_plot_->add(0, shown_.time_s, 1e3 * shown_.solve_s);
+      margin_plot_->add(0, shown_.time_s, shown_.stability_margin);
       last_frame_ = shown_.frame;
     }
   }
@@ -240,6 +254,7 @@ void TrainerWindow::tick() {
   ++figures_.renders;
   force_plot_->update();
   frame_plot_->update();
+  margin_plot_->update();
   update_status();
   if (!session_->running() && window_options_.headless) {
     figures_.error = session_->error();
@@ -340,6 +355,47 @@ void TrainerWindow::toggle_colour_field() {
 }
 
 void TrainerWindow::toggle_plane() { lateral_x_ = !lateral_x_; }
+
+bool TrainerWindow::open_scene(const std::filesystem::path& file) {
+  // The scene is checked whole before anything of the running one is let go: a broken file leaves
+  // the session as it was, its reason (file:line) on the message line.
+  std::optional<config::Scene> loaded;
+  std::string refused;
+  try {
+    loaded = config::load_scene(file.string()).scene;
+  } catch (const config::SceneError& error) {
+    for (const auto& d : error.diagnostics()) refused += d.format() + "; ";
+  } catch (const std::exception& e) {
+    refused = file.string() + ": " + e.what();
+  }
+  if (loaded && loaded->probes.empty())
+    refused = file.string() + ": the scene has no probes to touch the tissue with";
+  ReferenceVolume volume;
+  double gain = 1;
+  std::string description;
+  if (refused.empty()) try {
+      volume = scene_ultrasound(*loaded, gain, description);
+    } catch (const std::exception& e) {
+      refused = file.string() + ": " + e.what();
+    }
+  if (!refused.empty()) {
+    while (!refused.empty() && (refused.back() == ' ' || refused.back() == ';')) refused.pop_back();
+    message_->setStyleSheet("color: #c00000");
+    message_->setText(QString::fromStdString("cannot open " + file.string() + ": " + refused));
+    return false;
+  }
+  scene_ = *loaded;
+  scene_path_ = file;
+  volume_ = std::move(volume), gain_ = gain, volume_description_ = description;
+  ultrasound_->setToolTip(QString::fromStdString("Ultrasound: " + volume_description_));
+  setWindowTitle(QString::fromStdString("Fetouch trainer: " + scene_.name));
+  const haptics::HapticLoopSettings scene_loop = loop_settings(scene_);
+  model_ = asked_model_ = scene_loop.local_model, hold_ = asked_hold_ = scene_loop.hold;
+  show_mode();
+  message_->setStyleSheet("");
+  start_take(std::nullopt);
+  return session_ != nullptr;
+}
 
 void TrainerWindow::ask_mode(haptics::LocalModelKind model, haptics::HoldKind hold) {
   if (!session_) return;

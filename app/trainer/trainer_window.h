@@ -53,12 +53,16 @@ struct WindowFigures {
 
 class TrainerWindow : public QMainWindow {
  public:
-  TrainerWindow(const config::Scene& scene, const TrainerOptions& session, const WindowOptions& window);
+  TrainerWindow(const config::Scene& scene, const TrainerOptions& session, const WindowOptions& window,
+                std::filesystem::path scene_path = {});
   ~TrainerWindow() override;
   const WindowFigures& figures() const { return figures_; }
   TrainerSession* session() { return session_.get(); }
   bool save_screenshot(const std::filesystem::path& file);
   // The controls, as the buttons and shortcuts call them (tests call them too).
+  // Open: another scene, checked whole first; refused (false, the reason on the message line) if
+  // it cannot be loaded, and the running session goes on.
+  bool open_scene(const std::filesystem::path& file);
   void toggle_pause();
   void reset();
   void toggle_recording();
@@ -106,7 +110,8 @@ class TrainerWindow : public QMainWindow {
   vtkGenericOpenGLRenderWindow* render_window_ = nullptr;
   vtkRenderer* renderer_ = nullptr;
   QLabel *ultrasound_ = nullptr, *status_ = nullptr, *message_ = nullptr;
-  TracePlot *force_plot_ = nullptr, *frame_plot_ = nullptr;
+  TracePlot *force_plot_ = nullptr, *frame_plot_ = nullptr, *margin_plot_ = nullptr;
+  std::filesystem::path scene_path_;
   QTimer* timer_ = nullptr;
   QComboBox *model_box_ = nullptr, *hold_box_ = nullptr;
   haptics::LocalModelKind model_ = haptics::LocalModelKind::pi;

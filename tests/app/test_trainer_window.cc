@@ -221,6 +221,37 @@ TEST_F(TrainerWindowTest, SwitchingTheLocalModelIsAppliedOrRefusedWithTheReason)
   std::printf("%s\n", w.message().c_str());
 }
 
+// Open: a scene with an error is refused with its file, line and reason on the message line and
+// the running session goes on; a good one replaces it (another mesh, the title, a take from rest).
+TEST_F(TrainerWindowTest, OpenRefusesABrokenSceneAndKeepsTheSessionThenOpensAnother) {
+  app::trainer::WindowOptions options;
+  options.out = out_;
+  TrainerWindow w(scene("fetus_phantom.yaml"), {}, options);
+  w.show();
+  QApplication::setActiveWindow(&w);
+  QTest::qWait(600);
+  ASSERT_TRUE(w.session());
+  const auto* before = w.session();
+  const std::size_t points = w.session()->mesh().points.size();
+  const long ticks = w.session()->monitor().ticks.load();
+  fs::create_directories(out_);
+  const fs::path broken = out_ / "broken.yaml";
+  std::ofstream(broken) << "name: broken\nunits: SI\nmesh:\n  box: {size_m: [0.1, 0.1, -0.05]}\n";
+  EXPECT_FALSE(w.open_scene(broken));
+  EXPECT_NE(w.message().find("cannot open " + broken.string()), std::string::npos) << w.message();
+  EXPECT_NE(w.message().find("broken.yaml:"), std::string::npos) << "file:line in " << w.message();
+  EXPECT_EQ(w.session(), before);
+  QTest::qWait(300);
+  EXPECT_GT(w.session()->monitor().ticks.load(), ticks + 100) << "the session goes on";
+
+  ASSERT_TRUE(w.open_scene(fs::path(FETOUCH_SOURCE_DIR) / "config" / "scenes" / "block_press.yaml"));
+  EXPECT_EQ(w.windowTitle().toStdString(), "Fetouch trainer: block_press");
+  EXPECT_NE(w.session()->mesh().points.size(), points);
+  EXPECT_EQ(largest_displacement(w), 0.0) << "a new take from rest";
+  QTest::qWait(1000);
+  EXPECT_GT(w.session()->monitor().ticks.load(), 500);
+}
+
 }  // namespace
 }  // namespace fetouch::testing
 
