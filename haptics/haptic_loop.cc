@@ -193,7 +193,9 @@ void HapticLoop::consider_mode_switch(FrameSlot& slot) {
     settings_.modes->answer(verdict);
     return;
   }
-  const FrameSlot kept_slot_gains = slot;  // allocates: the producer's side
+  // What prepare() changes for another mode (the compliance it recomputes is the same).
+  const LocalModelGains kept_gains = slot.gains;
+  const GainSelection kept_selection = slot.selection;
   slot.local_model = verdict.local_model;
   slot.hold = verdict.hold;
   prepare(slot);
@@ -219,7 +221,8 @@ void HapticLoop::consider_mode_switch(FrameSlot& slot) {
                     "with K known within %.0f %%; %s stays",
                     asked.c_str(), slot.gains.proportional, settings_.ratio * slot.gains.integral,
                     slot.selection.spectral_radius, margin, kept.c_str());
-    slot = kept_slot_gains;
+    slot.local_model = producer_model_, slot.hold = producer_hold_;
+    slot.gains = kept_gains, slot.selection = kept_selection;
   }
   verdict.text = text;
   settings_.modes->answer(verdict);

@@ -195,7 +195,7 @@ void assign_regions(VolumeMesh& mesh, const MaskVolume& labels, const std::vecto
     VolumeMesh::RegionReport& report = mesh.regions[std::size_t(mesh.region[t])];
     ++report.tetrahedra;
     const auto& p = mesh.nodes_m;
-    report.volume_m3 += tet_signed_volume(p[std::size_t(tet[0])], p[std::size_t(tet[1])], p[std::size_t(tet[2])], p[std::size_t(tet[3])]);
+    report.volume_m3 += volume_m3[t];
     report.min_dihedral_deg = std::min(report.min_dihedral_deg, min_dihedral_deg(p, tet));
     for (int f = 0; f < 4; ++f) {
       // Face f, opposite corner f, turned so that its normal points out of the (positive) tetrahedron.
