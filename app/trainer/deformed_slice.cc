@@ -76,14 +76,27 @@ void DeformedSlicer::slice(const std::vector<float>& displacement, const SlicePl
   const double pixel_a = plane.width_m / plane.columns, pixel_b = plane.height_m / plane.rows;
   for (std::size_t t = 0; t < tetrahedra_.size(); ++t) {
     const auto& tet = tetrahedra_[t];
-    double dmin = 1e300, dmax = -1e300, amin = 1e300, amax = -1e300, bmin = 1e300, bmax = -1e300;
-    for (unsigned int v : tet) {
-      const Eigen::Vector3d r = deformed_[v] - plane.centre;
-      const double d = r.dot(normal), a = r.dot(plane.lateral), b = r.dot(plane.up);
-      dmin = std::min(dmin, d), dmax = std::max(dmax, d);
-      amin = std::min(amin, a), amax = std::max(amax, a), bmin = std::min(bmin, b), bmax = std::max(bmax, b);
+    double d[4];
+    double dmin = 1e300, dmax = -1e300;
+    for (int k = 0; k < 4; ++k) {
+      d[k] = (deformed_[tet[k]] - plane.centre).dot(normal);
+      dmin = std::min(dmin, d[k]), dmax = std::max(dmax, d[k]);
     }
     if (dmin > 0 || dmax < 0) continue;
+    // The pixels to test: those in the box of the tetrahedron's cross-section with the plane (its
+    // vertices in the plane and its edges' crossings), a fraction of the box of its projection.
+    double amin = 1e300, amax = -1e300, bmin = 1e300, bmax = -1e300;
+    const auto extend = [&](const Eigen::Vector3d& x) {
+      const Eigen::Vector3d r = x - plane.centre;
+      const double a = r.dot(plane.lateral), b = r.dot(plane.up);
+      amin = std::min(amin, a), amax = std::max(amax, a), bmin = std::min(bmin, b), bmax = std::max(bmax, b);
+    };
+    for (int k = 0; k < 4; ++k) {
+      if (d[k] == 0) extend(deformed_[tet[k]]);
+      for (int m = k + 1; m < 4; ++m)
+        if ((d[k] < 0 && d[m] > 0) || (d[k] > 0 && d[m] < 0))
+          extend(deformed_[tet[k]] + d[k] / (d[k] - d[m]) * (deformed_[tet[m]] - deformed_[tet[k]]));
+    }
     const int i0 = std::max(0, static_cast<int>(std::ceil(amin / pixel_a + 0.5 * plane.columns - 0.5)));
     const int i1 = std::min(plane.columns - 1, static_cast<int>(std::floor(amax / pixel_a + 0.5 * plane.columns - 0.5)));
     const int j0 = std::max(0, static_cast<int>(std::ceil(0.5 * plane.rows - bmax / pixel_b - 0.5)));
@@ -97,9 +110,11 @@ void DeformedSlicer::slice(const std::vector<float>& displacement, const SlicePl
     const Eigen::Matrix3d inverse = m.inverse();
     const Eigen::Vector3d& X0 = points_[tet[0]];
     const Eigen::Vector3d e1 = points_[tet[1]] - X0, e2 = points_[tet[2]] - X0, e3 = points_[tet[3]] - X0;
-    for (int j = j0; j <= j1; ++j)
-      for (int i = i0; i <= i1; ++i) {
-        const Eigen::Vector3d l = inverse * (plane.pixel(i, j) - x0);
+    // Barycentric coordinates are affine in the pixel's indices: a step along a row adds `step`.
+    const Eigen::Vector3d step = inverse * (pixel_a * plane.lateral);
+    for (int j = j0; j <= j1; ++j) {
+      Eigen::Vector3d l = inverse * (plane.pixel(i0, j) - x0);
+      for (int i = i0; i <= i1; ++i, l += step) {
         const double tolerance = -1e-9;
         if (l[0] < tolerance || l[1] < tolerance || l[2] < tolerance || 1 - l.sum() < tolerance) continue;
         const std::size_t p = std::size_t(j) * plane.columns + i;
@@ -107,6 +122,7 @@ void DeformedSlicer::slice(const std::vector<float>& displacement, const SlicePl
         for (int c = 0; c < 3; ++c) reference[3 * p + c] = static_cast<float>(X[c]);
         covering_[p] = static_cast<int>(material_[t]) + 1;
       }
+    }
   }
   for (int j = 0; j < plane.rows; ++j)
     for (int i = 0; i < plane.columns; ++i) {

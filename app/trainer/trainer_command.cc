@@ -96,8 +96,10 @@ int run_trainer(const TrainerCommandOptions& o) {
     json.key("late_ticks").value(s.timing.tick_overruns);
     json.key("frame_overruns").value(s.timing.frame_overruns);
     json.key("skipped_frames").value(s.timing.skipped_frames);
+    json.key("ultrasound_asked").value(f.ultrasound_asked);
     json.key("ultrasound_images").value(f.ultrasound_images);
     json.key("ultrasound_image_ms").value(image_ms);
+    json.key("ultrasound_images_per_s").value(f.ultrasound_per_s);
     json.key("renders").value(f.renders);
     json.key("wall_s").value(f.wall_s);
     json.key("screenshot").value(o.screenshot);
@@ -132,7 +134,8 @@ int run_trainer(const TrainerCommandOptions& o) {
                 "%ld frame overruns, %ld skipped\n",
                 s.ticks, s.frames, 1e3 * s.solve_p99_s, 1e6 * s.timing.lateness_p99_s, 1e6 * s.timing.lateness_max_s,
                 s.timing.tick_overruns, s.timing.frame_overruns, s.timing.skipped_frames);
-    std::printf("  ultrasound: %ld images of 256 x 256, %.1f ms each; %ld renders\n", f.ultrasound_images, image_ms, f.renders);
+    std::printf("  ultrasound: %ld images of 256 x 256 shown of %ld asked for, %.1f per second, %.1f ms each to make; "
+                "%ld renders\n", f.ultrasound_images, f.ultrasound_asked, f.ultrasound_per_s, image_ms, f.renders);
     if (!o.screenshot.empty())
       std::printf("  wrote %s, %s (the ultrasound image) and %s (the tissue shown)\n", o.screenshot.c_str(),
                   f.ultrasound_png.c_str(), f.tissue_vtu.c_str());

@@ -48,7 +48,7 @@ TrainerWindow::TrainerWindow(const config::Scene& scene, const TrainerOptions& s
                              std::filesystem::path scene_path)
     : scene_(scene), session_options_(session), window_options_(window), scene_path_(std::move(scene_path)) {
   setWindowTitle(QString::fromStdString("Fetouch trainer: " + scene.name));
-  volume_ = scene_ultrasound(scene_, gain_, volume_description_);
+  volume_ = std::make_shared<const ReferenceVolume>(scene_ultrasound(scene_, gain_, volume_description_));
 
   vtk_widget_ = new QVTKOpenGLNativeWidget(this);
   auto render_window = vtkSmartPointer<vtkGenericOpenGLRenderWindow>::New();
@@ -158,6 +158,7 @@ void TrainerWindow::start_take(const std::optional<std::filesystem::path>& recor
   if (session_) session_->request_stop();
   session_.reset();
   view_.reset();
+  imager_.reset();
   if (renderer_) renderer_->RemoveAllViewProps();
   TrainerOptions options = session_options_;
   options.recording = recording;
@@ -176,7 +177,8 @@ void TrainerWindow::start_take(const std::optional<std::filesystem::path>& recor
   std::vector<double> radii;
   for (const auto& p : session_->scene().probes) radii.push_back(p.radius_m);
   view_ = std::make_unique<TissueView>(renderer_, session_->mesh(), radii);
-  slicer_ = std::make_unique<DeformedSlicer>(session_->mesh().points, session_->mesh().tetrahedra, session_->mesh().material);
+  imager_ = std::make_unique<UltrasoundImager>(session_->mesh().points, session_->mesh().tetrahedra, session_->mesh().material,
+                                               volume_, gain_);
   force_plot_->set_series(static_cast<int>(radii.size()));
   force_plot_->clear();
   frame_plot_->clear();
@@ -201,7 +203,10 @@ void TrainerWindow::start_take(const std::optional<std::filesystem::path>& recor
   message_->setText(QString::fromStdString(text));
   ++takes_;
   mode_request_ = 0;
-  session_->start();
+  // The session's clock starts at the window's next tick, once the view has been drawn: the first
+  // render (software OpenGL compiles its shaders then) takes up to a second, which would otherwise
+  // pass unseen in the take.
+  start_pending_ = true;
   // A new take starts in the scene's mode; one chosen since is asked again (and analysed again).
   const haptics::HapticLoopSettings& scene_loop = session_->loop();
   if (model_ != scene_loop.local_model || hold_ != scene_loop.hold) {
@@ -217,6 +222,12 @@ void TrainerWindow::tick() {
   if (!session_) {
     if (window_options_.headless) close();
     return;
+  }
+  if (start_pending_) {
+    render_window_->Render();
+    session_->start();
+    start_pending_ = false;
+    take_started_ = std::chrono::steady_clock::now(), take_images_ = figures_.ultrasound_images;
   }
   take_mode_verdict();
   if (session_->take_snapshot()) {
@@ -239,17 +250,21 @@ void TrainerWindow::tick() {
     for (int i = 0; i < probes && i < SessionMonitor::kMaxDevices; ++i) force_plot_->add(i, t, p[i].force.norm());
   }
   // The image plane follows the probe at the window's rate (through its proxy on the surface while
-  // it touches, else through its patch), the tissue in it at the solver's: a new image when either
-  // moved.
+  // it touches, else through its patch), the tissue in it at the solver's: a new image is asked for
+  // when either moved, and made while the view renders; the newest made is shown.
   if (!shown_.patch_centre.empty()) {
     const int probe = std::max(0, session_->cursor_probe());
     const SessionMonitor::ProbeTick& t = monitor.probes.front()[probe];
     const Eigen::Vector3d at = t.in_contact ? t.proxy : shown_.patch_centre[probe];
-    if (shown_.frame != imaged_frame_ || (at - imaged_at_).norm() > 5e-5) {
-      update_ultrasound(at, shown_.patch_normal[probe]);
-      imaged_frame_ = shown_.frame, imaged_at_ = at;
+    if (shown_.frame != imaged_frame_ || (at - imaged_at_).norm() > 5e-5 || plane_lateral_x_ != lateral_x_) {
+      plane_ = probe_plane(at, shown_.patch_normal[probe], lateral_x_ ? Eigen::Vector3d::UnitX() : Eigen::Vector3d::UnitY(),
+                           kImageWidthM, kImageDepthM, kImageSize, kImageSize);
+      imager_->request(shown_.frame, shown_.displacement, plane_);
+      ++figures_.ultrasound_asked;
+      imaged_frame_ = shown_.frame, imaged_at_ = at, plane_lateral_x_ = lateral_x_;
     }
   }
+  if (imager_->take(image_)) show_ultrasound();
   render_window_->Render();
   ++figures_.renders;
   force_plot_->update();
@@ -265,20 +280,18 @@ void TrainerWindow::tick() {
         export_views(*window_options_.screenshot);
     }
     figures_.wall_s = seconds_since(started_);
+    figures_.ultrasound_per_s = (figures_.ultrasound_images - take_images_) / seconds_since(take_started_);
     timer_->stop();
     close();
   }
 }
 
-void TrainerWindow::update_ultrasound(const Eigen::Vector3d& point, const Eigen::Vector3d& normal) {
-  const auto start = std::chrono::steady_clock::now();
-  plane_ = probe_plane(point, normal, lateral_x_ ? Eigen::Vector3d::UnitX() : Eigen::Vector3d::UnitY(), kImageWidthM,
-                       kImageDepthM, kImageSize, kImageSize);
-  slicer_->slice(shown_.displacement, plane_, volume_.empty() ? nullptr : &volume_, gain_, image_, reference_);
-  QImage picture(image_.data(), kImageSize, kImageSize, kImageSize, QImage::Format_Grayscale8);
+void TrainerWindow::show_ultrasound() {
+  const SlicePlane& p = image_.plane;
+  QImage picture(image_.pixels.data(), p.columns, p.rows, p.columns, QImage::Format_Grayscale8);
   const int side = std::min(ultrasound_->width(), ultrasound_->height()) - 4;
-  ultrasound_->setPixmap(QPixmap::fromImage(picture.copy()).scaled(side, side, Qt::KeepAspectRatio, Qt::SmoothTransformation));
-  figures_.ultrasound_seconds += seconds_since(start);
+  ultrasound_->setPixmap(QPixmap::fromImage(picture).scaled(side, side, Qt::KeepAspectRatio, Qt::SmoothTransformation));
+  figures_.ultrasound_seconds += image_.seconds;
   ++figures_.ultrasound_images;
 }
 
@@ -311,14 +324,13 @@ void TrainerWindow::export_views(const std::filesystem::path& screenshot) {
   try {
     // The image made again from the tissue shown, in the plane shown: the pair is consistent even
     // if the last frame came after the last image.
-    std::vector<std::uint8_t> image;
-    std::vector<float> reference;
-    slicer_->slice(shown_.displacement, plane_, volume_.empty() ? nullptr : &volume_, gain_, image, reference);
+    UltrasoundImage image;
+    imager_->make_now(shown_.frame, shown_.displacement, plane_, image);
     figures_.ultrasound_png = stem.string() + ".ultrasound.png";
     figures_.tissue_vtu = stem.string() + ".vtu";
-    write_grey_png(image, plane_.columns, plane_.rows, figures_.ultrasound_png);
+    write_grey_png(image.pixels, plane_.columns, plane_.rows, figures_.ultrasound_png);
     write_tissue_vtu(session_->mesh(), shown_.displacement, figures_.tissue_vtu);
-    figures_.plane = plane_, figures_.gain = gain_, figures_.volume = !volume_.empty(), figures_.frame = shown_.frame;
+    figures_.plane = plane_, figures_.gain = gain_, figures_.volume = !volume_->empty(), figures_.frame = shown_.frame;
   } catch (const std::exception& e) {
     figures_.error = e.what();
   }
@@ -386,7 +398,7 @@ bool TrainerWindow::open_scene(const std::filesystem::path& file) {
   }
   scene_ = *loaded;
   scene_path_ = file;
-  volume_ = std::move(volume), gain_ = gain, volume_description_ = description;
+  volume_ = std::make_shared<const ReferenceVolume>(std::move(volume)), gain_ = gain, volume_description_ = description;
   ultrasound_->setToolTip(QString::fromStdString("Ultrasound: " + volume_description_));
   setWindowTitle(QString::fromStdString("Fetouch trainer: " + scene_.name));
   const haptics::HapticLoopSettings scene_loop = loop_settings(scene_);

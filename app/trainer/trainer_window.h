@@ -16,6 +16,7 @@
 #include "app/trainer/deformed_slice.h"
 #include "app/trainer/tissue_view.h"
 #include "app/trainer/trainer_session.h"
+#include "app/trainer/ultrasound_imager.h"
 
 class QComboBox;
 class QLabel;
@@ -36,8 +37,10 @@ struct WindowOptions {
 
 // What the window measured, for the command's summary.
 struct WindowFigures {
-  long ultrasound_images = 0;
-  double ultrasound_seconds = 0;  // time spent making them
+  long ultrasound_asked = 0;      // images asked for (a new frame, or the probe moved)
+  long ultrasound_images = 0;     // shown (an image asked for is skipped if a newer one is asked before it starts)
+  double ultrasound_seconds = 0;  // time spent making those (on the imager's thread)
+  double ultrasound_per_s = 0;    // shown per second of the last take, from its start to its end
   double wall_s = 0;
   long renders = 0;
   std::string error;
@@ -76,9 +79,7 @@ class TrainerWindow : public QMainWindow {
   haptics::HoldKind hold() const { return hold_; }
   std::string message() const;  // the message line
   void move_cursor_along_view(double metres);
-  const std::vector<std::uint8_t>& ultrasound_image() const { return image_; }
-  const std::vector<float>& ultrasound_reference() const { return reference_; }
-  const SlicePlane& ultrasound_plane() const { return plane_; }
+  const UltrasoundImage& ultrasound_image() const { return image_; }  // the one shown
   std::optional<std::filesystem::path> recording() const { return recording_; }
   const TissueSnapshot& shown() const { return shown_; }  // the tissue state on screen
   const Eigen::Vector3d& cursor() const { return cursor_; }
@@ -90,7 +91,7 @@ class TrainerWindow : public QMainWindow {
  private:
   void start_take(const std::optional<std::filesystem::path>& recording);
   void tick();
-  void update_ultrasound(const Eigen::Vector3d& point, const Eigen::Vector3d& normal);
+  void show_ultrasound();
   void update_status();
   void take_mode_verdict();
   void show_mode();
@@ -102,8 +103,8 @@ class TrainerWindow : public QMainWindow {
   WindowOptions window_options_;
   std::unique_ptr<TrainerSession> session_;
   std::unique_ptr<TissueView> view_;
-  std::unique_ptr<DeformedSlicer> slicer_;
-  ReferenceVolume volume_;
+  std::unique_ptr<UltrasoundImager> imager_;
+  std::shared_ptr<const ReferenceVolume> volume_;
   double gain_ = 1;
   std::string volume_description_;
   QVTKOpenGLNativeWidget* vtk_widget_ = nullptr;
@@ -120,18 +121,18 @@ class TrainerWindow : public QMainWindow {
   haptics::HoldKind asked_hold_ = haptics::HoldKind::zoh;              // none is pending)
   long mode_request_ = 0;  // the newest asked of this take's session (0: none)
   ColourField field_ = ColourField::displacement;
-  bool lateral_x_ = true;
+  bool start_pending_ = false;  // the take's session starts at the next tick
+  bool lateral_x_ = true, plane_lateral_x_ = true;  // asked; in the newest plane asked for
   Eigen::Vector3d cursor_ = Eigen::Vector3d::Zero();
-  std::vector<std::uint8_t> image_;
-  std::vector<float> reference_;
-  SlicePlane plane_;
+  UltrasoundImage image_;  // the one shown
+  SlicePlane plane_;       // the newest asked for
   std::optional<std::filesystem::path> recording_;
   int takes_ = 0, screenshots_ = 0;
   long last_frame_ = -2, frames_seen_ = 0, overruns_ = 0, imaged_frame_ = -3;
   Eigen::Vector3d imaged_at_ = Eigen::Vector3d::Zero();  // where the shown image's plane went through
   double haptic_hz_ = 0, solver_hz_ = 0, ultrasound_hz_ = 0;
-  std::chrono::steady_clock::time_point started_, rate_from_;
-  long rate_ticks_ = 0, rate_frames_ = 0, rate_images_ = 0;
+  std::chrono::steady_clock::time_point started_, rate_from_, take_started_;
+  long rate_ticks_ = 0, rate_frames_ = 0, rate_images_ = 0, take_images_ = 0;
   WindowFigures figures_;
   TissueSnapshot shown_;
 };
