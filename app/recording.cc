@@ -103,13 +103,13 @@ struct RecordingWriter::Impl {
     std::unique_ptr<Series> time, position, velocity, force, proxy, penetration, normal_force, in_contact;
   };
   std::vector<DeviceSeries> devices;
-  std::unique_ptr<Series> frame, time, solve, residual, margin, iterations, converged, eigenvalues, gains;
+  std::unique_ptr<Series> frame, time, solve, residual, margin, iterations, converged, eigenvalues, gains, mode;
   int contacts = 0;
 
   ~Impl() {
     devices.clear();
     frame.reset(), time.reset(), solve.reset(), residual.reset(), margin.reset(), iterations.reset();
-    converged.reset(), eigenvalues.reset(), gains.reset();
+    converged.reset(), eigenvalues.reset(), gains.reset(), mode.reset();
     if (file >= 0) H5Fclose(file);
   }
 };
@@ -167,6 +167,8 @@ RecordingWriter::RecordingWriter(const std::filesystem::path& path, const Record
                                            static_cast<hsize_t>(std::max(1, r.contacts)), r.name);
   r.gains = std::make_unique<Series>(frames, "gains", H5T_NATIVE_DOUBLE, 2, r.name);
   write_attribute(r.gains->dataset, "columns", "proportional (Kh), integral (I per tick)");
+  r.mode = std::make_unique<Series>(frames, "mode", H5T_NATIVE_UINT8, 2, r.name);
+  write_attribute(r.mode->dataset, "columns", "local model (0 p, 1 pi, 2 smith, 3 pi_smith), hold (0 zoh, 1 foh)");
   H5Gclose(frames);
   // From here on the file stays consistent on disk at every flush.
   check(H5Fstart_swmr_write(r.file), r.name + ": cannot start single-writer/multiple-reader mode");
@@ -219,6 +221,8 @@ void RecordingWriter::append(const FrameRecord& f) {
   r.converged->append(&converged, 1);
   r.eigenvalues->append(eigenvalues.data(), 1);
   r.gains->append(gains, 1);
+  const std::uint8_t mode[2] = {static_cast<std::uint8_t>(std::max(0, f.local_model)), static_cast<std::uint8_t>(std::max(0, f.hold))};
+  r.mode->append(mode, 1);
 }
 
 void RecordingWriter::flush() {
@@ -233,7 +237,7 @@ void RecordingWriter::commit() {
   const std::string name = r.name;
   r.devices.clear();  // every dataset closed before the file
   r.frame.reset(), r.time.reset(), r.solve.reset(), r.residual.reset(), r.margin.reset(), r.iterations.reset();
-  r.converged.reset(), r.eigenvalues.reset(), r.gains.reset();
+  r.converged.reset(), r.eigenvalues.reset(), r.gains.reset(), r.mode.reset();
   const herr_t closed = H5Fclose(r.file);
   r.file = -1;
   check(closed, name + ": cannot be closed");
@@ -411,6 +415,8 @@ Recording read_recording(const std::filesystem::path& path) {
       const hsize_t contacts = std::max<hsize_t>(1, out.devices.size());
       const auto eigenvalues = read_all(frames, "stiffness_eigenvalues_n_per_m", contacts, name);
       const auto gains = read_all(frames, "gains", 2, name);
+      const bool has_mode = H5Lexists(frames, "mode", H5P_DEFAULT) > 0;  // since 2026-11-25
+      const auto mode = has_mode ? read_all(frames, "mode", 2, name) : std::vector<double>{};
       H5Gclose(frames);
       const std::size_t rows = std::min({frame.size(), time.size(), solve.size(), residual.size(), margin.size(),
                                          iterations.size(), converged.size(), std::size_t(eigenvalues.size() / contacts), gains.size() / 2});
@@ -421,6 +427,13 @@ Recording read_recording(const std::filesystem::path& path) {
         f.stiffness_eigenvalues.assign(eigenvalues.begin() + static_cast<long>(r * contacts),
                                        eigenvalues.begin() + static_cast<long>((r + 1) * contacts));
         f.proportional_gain = gains[2 * r], f.integral_gain = gains[2 * r + 1];
+        if (2 * r + 1 < mode.size()) {
+          const double model = mode[2 * r], hold = mode[2 * r + 1];
+          if (!(model >= 0 && model <= 3 && hold >= 0 && hold <= 1))
+            throw std::runtime_error(name + ": /frames/mode row " + std::to_string(r) + " holds (" + std::to_string(model) + ", " +
+                                     std::to_string(hold) + "); local models are 0 to 3 and holds 0 or 1 (docs/replay.md)");
+          f.local_model = static_cast<int>(model), f.hold = static_cast<int>(hold);
+        }
         out.frames.push_back(f);
       }
     }

@@ -11,7 +11,9 @@
 //       frame [n] (int64); time_s, solve_s, residual, stability_margin [n];
 //       newton_iterations [n] (int32); converged [n] (0/1);
 //       stiffness_eigenvalues_n_per_m [n x m] (of the condensed normal stiffness W_n^-1);
-//       gains [n x 2] (Kh, I per tick)
+//       gains [n x 2] (Kh, I per tick);
+//       mode [n x 2] (uint8: local model 0 p, 1 pi, 2 smith, 3 pi_smith; hold 0 zoh, 1 foh), which
+//       changes within a take when the trainer's switch is accepted (absent in older recordings)
 // The file is written in HDF5's single-writer/multiple-reader mode (SWMR): every flush leaves it
 // consistent on disk, so a session killed at any moment loses only what came after the last flush
 // (the I/O thread flushes at least once a second), and the file can be read while it is written.
@@ -51,6 +53,9 @@ struct FrameRecord {
   bool converged = true;
   std::vector<double> stiffness_eigenvalues;  // m values
   double proportional_gain = 0, integral_gain = 0;
+  // The mode those gains are for (haptics::LocalModelKind and HoldKind as integers, the codes of
+  // /frames/mode); -1 where a recording read back has no mode column.
+  int local_model = -1, hold = -1;
 };
 
 class RecordingWriter {

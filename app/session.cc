@@ -36,6 +36,11 @@ void spread(std::vector<double> values, double& p50, double& p99, double& max) {
 
 // The frame's row of the recording: the solve's status, the eigenvalues of the condensed normal
 // stiffness W_n^-1 and the gains chosen for it.
+// /frames/mode's codes (docs/replay.md) are the enumerators' values.
+static_assert(static_cast<int>(haptics::LocalModelKind::p) == 0 && static_cast<int>(haptics::LocalModelKind::pi) == 1 &&
+              static_cast<int>(haptics::LocalModelKind::smith) == 2 && static_cast<int>(haptics::LocalModelKind::pi_smith) == 3 &&
+              static_cast<int>(haptics::HoldKind::zoh) == 0 && static_cast<int>(haptics::HoldKind::foh) == 1);
+
 FrameRecord frame_record(const haptics::FrameSlot& slot, double time_s) {
   FrameRecord f;
   f.frame = slot.update.frame;
@@ -49,6 +54,8 @@ FrameRecord frame_record(const haptics::FrameSlot& slot, double time_s) {
     f.stiffness_eigenvalues.push_back(eigen.eigenvalues()[i] > 0 ? 1 / eigen.eigenvalues()[i] : 0);
   f.proportional_gain = slot.gains.proportional;
   f.integral_gain = slot.gains.integral;
+  f.local_model = static_cast<int>(slot.local_model);
+  f.hold = static_cast<int>(slot.hold);
   f.stability_margin = 1 - slot.selection.spectral_radius;
   return f;
 }

@@ -63,6 +63,7 @@ TEST(Recording, RoundTripKeepsEveryValue) {
       f.newton_iterations = static_cast<int>(j % 4), f.converged = j != 7;
       f.stiffness_eigenvalues = {100.0 + j, 300.0 - j};
       f.proportional_gain = 0.2, f.integral_gain = 1e-3 * j;
+      f.local_model = j < 20 ? 3 : 0, f.hold = j < 20 ? 0 : 1;  // pi_smith + zoh, then p + foh
       writer.append(f);
     }
     writer.commit();
@@ -95,6 +96,10 @@ TEST(Recording, RoundTripKeepsEveryValue) {
   EXPECT_FALSE(r.frames[7].converged);
   EXPECT_EQ(r.frames[10].stiffness_eigenvalues, (std::vector<double>{110, 290}));
   EXPECT_EQ(r.frames[10].integral_gain, 1e-3 * 10);
+  EXPECT_EQ(r.frames[19].local_model, 3);
+  EXPECT_EQ(r.frames[19].hold, 0);
+  EXPECT_EQ(r.frames[20].local_model, 0);
+  EXPECT_EQ(r.frames[20].hold, 1);
   fs::remove(path);
 }
 
@@ -191,6 +196,7 @@ TEST(Recording, DatasetsOfTheWrongShapeAreRefused) {
       {"devices/left/in_contact", {1000000000}},   // a billion rows claimed (nothing stored)
       {"frames/frame", {1, 5}},                    // a malformed frames dataset
       {"frames/gains", {1}},                       // gains without their two columns
+      {"frames/mode", {1, 3}},                     // a mode of three columns
   };
   for (const Case& c : cases) {
     const fs::path bad = scratch(std::string("shapes_") + std::to_string(&c - cases.data()));

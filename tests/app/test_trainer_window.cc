@@ -15,6 +15,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <memory>
@@ -185,15 +186,40 @@ TEST_F(TrainerWindowTest, SwitchingTheLocalModelIsAppliedOrRefusedWithTheReason)
     w.show();
     QApplication::setActiveWindow(&w);
     ASSERT_EQ(w.local_model(), haptics::LocalModelKind::pi_smith);
+    w.toggle_recording();  // the switch happens in a recorded take
+    ASSERT_TRUE(w.recording());
+    const fs::path take = *w.recording();
     QTest::qWait(500);
     QTest::keyClick(&w, Qt::Key_M);  // pi_smith -> p
     QTest::keyClick(&w, Qt::Key_H);  // zoh -> foh
     QTest::qWait(1200);
     EXPECT_EQ(w.local_model(), haptics::LocalModelKind::p) << w.message();
     EXPECT_EQ(w.hold(), haptics::HoldKind::foh) << w.message();
-    EXPECT_NE(w.message().find("p + foh from frame"), std::string::npos) << w.message();
+    const std::string message = w.message();
+    const std::size_t from = message.find("p + foh from frame");
+    ASSERT_NE(from, std::string::npos) << message;
+    const long switched = std::stol(message.substr(from + std::strlen("p + foh from frame")));
     QTest::qWait(500);
     EXPECT_GT(w.shown().stability_margin, 0);
+    w.toggle_recording();  // ends the take
+    // The recording's frames carry the mode their answers were made for: the scene's, then from the
+    // frame whose answer the analysis accepted (applied from the next, the one the message names)
+    // the new one.
+    const app::Recording r = app::read_recording(take);
+    long first_p = -1, old_rows = 0, old_mode = 0, new_mode = 0;
+    for (const app::FrameRecord& f : r.frames) {
+      if (f.frame < switched - 1) {
+        ++old_rows;
+        old_mode += f.local_model == static_cast<int>(haptics::LocalModelKind::pi_smith) && f.hold == static_cast<int>(haptics::HoldKind::zoh);
+      } else {
+        new_mode += f.local_model == static_cast<int>(haptics::LocalModelKind::p) && f.hold == static_cast<int>(haptics::HoldKind::foh);
+        if (first_p < 0) first_p = f.frame;
+      }
+    }
+    EXPECT_EQ(old_mode, old_rows) << "every frame before the switch in the scene's pi_smith + zoh";
+    EXPECT_EQ(new_mode, static_cast<long>(r.frames.size()) - old_rows) << "every frame from it on in p + foh";
+    EXPECT_GT(new_mode, 5);
+    EXPECT_EQ(first_p, switched - 1);
   }
   // The default scene with its gains fixed.
   std::ifstream in(fs::path(FETOUCH_SOURCE_DIR) / "config" / "scenes" / "fetus_phantom.yaml");
