@@ -34,13 +34,13 @@ void spread(std::vector<double> values, double& p50, double& p99, double& max) {
   p50 = at(0.5), p99 = at(0.99), max = values.back();
 }
 
-// The frame's row of the recording: the solve's status, the eigenvalues of the condensed normal
-// stiffness W_n^-1 and the gains chosen for it.
 // /frames/mode's codes (docs/replay.md) are the enumerators' values.
 static_assert(static_cast<int>(haptics::LocalModelKind::p) == 0 && static_cast<int>(haptics::LocalModelKind::pi) == 1 &&
               static_cast<int>(haptics::LocalModelKind::smith) == 2 && static_cast<int>(haptics::LocalModelKind::pi_smith) == 3 &&
               static_cast<int>(haptics::HoldKind::zoh) == 0 && static_cast<int>(haptics::HoldKind::foh) == 1);
 
+// The frame's row of the recording: the solve's status, the eigenvalues of the condensed normal
+// stiffness W_n^-1, the gains chosen for it and the mode they are for.
 FrameRecord frame_record(const haptics::FrameSlot& slot, double time_s) {
   FrameRecord f;
   f.frame = slot.update.frame;

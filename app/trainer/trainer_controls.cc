@@ -43,7 +43,10 @@ void TrainerWindow::toggle_colour_field() {
   if (view_) view_->update_tissue(shown_, field_);
 }
 
-void TrainerWindow::toggle_plane() { lateral_x_ = !lateral_x_; }
+void TrainerWindow::toggle_plane() {
+  lateral_x_ = !lateral_x_;
+  imaged_frame_ = -3;  // the image shown is of the other plane: ask for a new one
+}
 
 bool TrainerWindow::open_scene(const std::filesystem::path& file) {
   // The scene is checked whole before anything of the running one is let go: a broken file leaves

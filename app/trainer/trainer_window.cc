@@ -251,12 +251,12 @@ void TrainerWindow::tick() {
     const int probe = std::max(0, session_->cursor_probe());
     const SessionMonitor::ProbeTick& t = monitor.probes.front()[probe];
     const Eigen::Vector3d at = t.in_contact ? t.proxy : shown_.patch_centre[probe];
-    if (shown_.frame != imaged_frame_ || (at - imaged_at_).norm() > 5e-5 || plane_lateral_x_ != lateral_x_) {
+    if (shown_.frame != imaged_frame_ || (at - imaged_at_).norm() > 5e-5) {
       plane_ = probe_plane(at, shown_.patch_normal[probe], lateral_x_ ? Eigen::Vector3d::UnitX() : Eigen::Vector3d::UnitY(),
                            kImageWidthM, kImageDepthM, kImageSize, kImageSize);
       imager_->request(shown_.frame, shown_.displacement, plane_);
       ++figures_.ultrasound_asked;
-      imaged_frame_ = shown_.frame, imaged_at_ = at, plane_lateral_x_ = lateral_x_;
+      imaged_frame_ = shown_.frame, imaged_at_ = at;
     }
   }
   if (imager_->take(image_)) show_ultrasound();

@@ -122,7 +122,7 @@ class TrainerWindow : public QMainWindow {
   long mode_request_ = 0;  // the newest asked of this take's session (0: none)
   ColourField field_ = ColourField::displacement;
   bool start_pending_ = false;  // the take's session starts at the next tick
-  bool lateral_x_ = true, plane_lateral_x_ = true;  // asked; in the newest plane asked for
+  bool lateral_x_ = true;
   Eigen::Vector3d cursor_ = Eigen::Vector3d::Zero();
   UltrasoundImage image_;  // the one shown
   SlicePlane plane_;       // the newest asked for

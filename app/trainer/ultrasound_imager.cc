@@ -48,11 +48,6 @@ bool UltrasoundImager::take(UltrasoundImage& image) {
 
 void UltrasoundImager::make_now(long frame, const std::vector<float>& displacement, const SlicePlane& plane,
                                 UltrasoundImage& image) {
-  make(frame, displacement, plane, image);
-}
-
-void UltrasoundImager::make(long frame, const std::vector<float>& displacement, const SlicePlane& plane,
-                            UltrasoundImage& image) {
   std::lock_guard<std::mutex> lock(slicer_mutex_);
   const auto start = std::chrono::steady_clock::now();
   const ReferenceVolume* volume = volume_ && !volume_->empty() ? volume_.get() : nullptr;
@@ -80,7 +75,7 @@ void UltrasoundImager::run() {
       plane = asked_plane_, frame = asked_frame_;
       asked_ = false;
     }
-    make(frame, displacement, plane, working);
+    make_now(frame, displacement, plane, working);
     std::lock_guard<std::mutex> lock(mutex_);
     std::swap(working, finished_image_);
     finished_ = true;

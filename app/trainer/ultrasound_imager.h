@@ -49,7 +49,6 @@ class UltrasoundImager {
 
  private:
   void run();
-  void make(long frame, const std::vector<float>& displacement, const SlicePlane& plane, UltrasoundImage& image);
 
   std::shared_ptr<const ReferenceVolume> volume_;
   double gain_;
