@@ -110,8 +110,16 @@ bool CavityTerm::assemble(const AssemblyState& state, AssemblyTarget& target) {
   }
   if (target.tangent) {
     const LinearSystem& system = *target.system;
-    wall_.add_hessian(u.begin(), -p, [&](unsigned int row, unsigned int column, double value) {
-      if (!constrained[row] && !constrained[column]) target.tangent[system.position(int(row), int(column))] += value;
+    if (positions_revision_ != system.pattern_revision()) {  // where each Hessian entry goes, found once
+      positions_.clear();
+      wall_.add_hessian(u.begin(), 0.0, [&](unsigned int row, unsigned int column, double) {
+        positions_.push_back(constrained[row] || constrained[column] ? -1 : system.position(int(row), int(column)));
+      });
+      positions_revision_ = system.pattern_revision();
+    }
+    std::size_t k = 0;
+    wall_.add_hessian(u.begin(), -p, [&](unsigned int, unsigned int, double value) {
+      if (const int at = positions_[k++]; at >= 0) target.tangent[at] += value;
     });
     stiffness_ = -1 / law_.volume_derivative(p, reference_volume_);  // -dp/dV of the law
   }
@@ -133,6 +141,21 @@ double CavityTerm::rank_one_load() const { return -stiffness_ * volume_residual_
 void CavityTerm::complete_step(const LinearSystem& /*system*/, Vector<double>& du) {
   dp_ = -stiffness_ * (volume_residual_ + g_ * du);
   step_start_ = pressure_;
+}
+
+// A pressure change dp with the deformation it causes, du = dp K_s^-1 g, keeps K_s du - g dp = 0:
+// moving along it changes only the volume. With w = (P + c g g')^-1 g = P^-1 g / (1 + c g'P^-1 g)
+// (P the factorisation of a recent K_s) the pair u += t w, p += t (1 - c g'w) keeps the force
+// balance to first order and moves the law's residual by t / c: t = -c r_V restores it.
+bool CavityTerm::restore(Vector<double>& u, LinearSystem& system) {
+  if (stiffness_ == 0 || system.rank_one_g() != &g_) return false;
+  const double residual = wall_.volume(u.begin()) - law_.volume(pressure_, reference_volume_);
+  w_.reinit(u.size());
+  system.apply_factorisation(g_.begin(), w_.begin(), 1);
+  const double t = -stiffness_ * residual;
+  u.add(t, w_);
+  pressure_ += t * (1 - stiffness_ * (g_ * w_));
+  return true;
 }
 
 }  // namespace fetouch::fem

@@ -9,6 +9,7 @@
 #include <cmath>
 #include <set>
 #include <string>
+#include <vector>
 
 #include "fem/cavity.h"
 #include "fem/discretisation.h"
@@ -31,6 +32,7 @@ class CavityTerm final : public Term {
   double rank_one_load() const override;
   void complete_step(const LinearSystem& system, dealii::Vector<double>& du) override;
   void take_step(double alpha) override { pressure_ = step_start_ + alpha * dp_; }
+  bool restore(dealii::Vector<double>& u, LinearSystem& system) override;
   double unknown() const override { return pressure_; }
   void set_unknown(double value) override { pressure_ = value; }
   bool satisfied() const override { return std::abs(volume_residual_) <= 1e-10 * reference_volume_; }
@@ -49,6 +51,9 @@ class CavityTerm final : public Term {
   double pressure_ = 0, step_start_ = 0, dp_ = 0;
   double volume_residual_ = 0;  // V(u) - V_law(p), m^3, at the last assembly
   dealii::Vector<double> g_;
+  dealii::Vector<double> w_;  // restore()'s direction
+  std::vector<int> positions_;  // each Hessian entry's place in the tangent's values (-1: constrained)
+  int positions_revision_ = -1;  // the pattern they were found in
 };
 
 }  // namespace fetouch::fem

@@ -57,6 +57,7 @@ void LinearSystem::set_up(const std::vector<Support>& supports, TangentSystem::M
                        amg ? d_.rigid_body_modes(constrained_) : std::vector<std::vector<double>>{});
   y_current_ = false;
   scatter_.clear();
+  ++pattern_revision_;
 }
 
 const int* LinearSystem::cell_scatter(unsigned int k) const {

@@ -59,6 +59,9 @@ class LinearSystem {
   // Where each cell matrix entry (i, j) of cell k goes in the tangent's value array, at
   // [k n^2 + i n + j]; -1 where the row or the column is constrained.
   const int* cell_scatter(unsigned int k) const;
+  // Counts set_up() calls: positions in the tangent's value array found under one revision hold
+  // until the next.
+  int pattern_revision() const { return pattern_revision_; }
 
   // The rank-one part (c = 0: none); g must outlive the next solves.
   void set_rank_one(double c, const dealii::Vector<double>* g);
@@ -89,6 +92,7 @@ class LinearSystem {
   dealii::AffineConstraints<double> constraints_;
   std::vector<bool> constrained_;
   mutable std::vector<int> scatter_;  // built on first use
+  int pattern_revision_ = 0;
   TangentSystem tangent_;
   double rank_one_c_ = 0;
   const dealii::Vector<double>* rank_one_g_ = nullptr;

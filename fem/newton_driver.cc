@@ -71,6 +71,16 @@ bool NewtonDriver::assemble(double lambda, Vector<double>& r, bool tangent, Vect
   return true;
 }
 
+const Vector<double>& NewtonDriver::eliminated(const Vector<double>& r) {
+  for (const Term* term : terms_)
+    if (const double load = term->rank_one_load(); load != 0 && system_.rank_one_g()) {
+      shifted_ = r;
+      shifted_.add(load, *system_.rank_one_g());
+      return shifted_;
+    }
+  return r;
+}
+
 std::vector<double> NewtonDriver::unknowns() const {
   std::vector<double> values;
   for (const Term* term : terms_) values.push_back(term->unknown());
@@ -91,6 +101,10 @@ StepReport NewtonDriver::newton(double lambda, const NewtonSettings& s, double r
   system_.apply_supports(supports_, static_factor(lambda), u_);
   Vector<double> r(d_.n_dofs()), du, trial_r(d_.n_dofs());
   bool assembled = false;  // r and the tangent are already those of the current u
+  // A frame starts from a linear prediction, which misses a liquid's volume to second order (its
+  // stiffness turns that into large forces): the terms restore their own equations first.
+  if (frame && tangent_assembled_)
+    for (Term* term : terms_) term->restore(u_, system_);
   for (int it = 0; it <= s.max_iterations; ++it) {
     // A frame's first correction solves with the previous frame's tangent, still in the matrix
     // (a frame moves the state little): the first assembly is the residual's alone. The trial step
@@ -110,15 +124,20 @@ StepReport NewtonDriver::newton(double lambda, const NewtonSettings& s, double r
     if (reference < 0) reference = norm;
     const bool satisfied = std::all_of(terms_.begin(), terms_.end(), [](const Term* t) { return t->satisfied(); });
     const bool tight = norm <= s.relative_tolerance * reference || norm <= s.absolute_tolerance;
+    // The right-hand side the step solves for: r with each term's own equation eliminated into it
+    // (a cavity's volume law: the force its pressure's mismatch with the law leaves on the wall).
+    const Vector<double>& effective = eliminated(r);
     // The accuracy policy: the errors the haptic loop would see, in its units (the caller's estimate
-    // of the handed-over points' displacement error, and the largest out-of-balance nodal force).
+    // of the handed-over points' displacement error, and the largest out-of-balance nodal force),
+    // weighed on the effective residual, which holds the terms' own equations too.
     const bool policy = frame && s.position_tolerance_m > 0 && s.force_tolerance_n > 0;
-    const bool accurate = policy && r.linfty_norm() <= s.force_tolerance_n && handover_error(r) <= s.position_tolerance_m;
+    const bool accurate = policy && effective.linfty_norm() <= s.force_tolerance_n &&
+                          handover_error(effective) <= s.position_tolerance_m;
     // The frame's work bound: once the residual is down a hundredfold, the remainder goes to the
     // next frame (a state far from equilibrium, whose tangent may be indefinite, is never handed on).
     const bool bounded =
         frame && s.frame_iterations > 0 && it >= s.frame_iterations && norm < 1e-2 * report.residuals.front();
-    if (satisfied && (tight || accurate || bounded)) {
+    if ((satisfied && (tight || bounded)) || accurate) {
       report.converged = true;
       report.accurate = !tight && accurate;
       report.carried = !tight && !accurate;
@@ -130,14 +149,7 @@ StepReport NewtonDriver::newton(double lambda, const NewtonSettings& s, double r
     // quadratic regime), aim the step straight at the convergence tolerance.
     const double eta = norm < 5e-2 * reference ? 0.5 * s.relative_tolerance * reference / norm : 1e-3;
     try {
-      const Vector<double>* rhs = &r;
-      for (const Term* term : terms_)
-        if (const double load = term->rank_one_load(); load != 0 && system_.rank_one_g()) {
-          shifted_ = r;
-          shifted_.add(load, *system_.rank_one_g());
-          rhs = &shifted_;
-        }
-      system_.solve(*rhs, du, std::clamp(eta, 1e-12, 1e-3), /*zero_guess=*/true);
+      system_.solve(effective, du, std::clamp(eta, 1e-12, 1e-3), /*zero_guess=*/true);
     } catch (const std::runtime_error& e) {  // a singular tangent (past a limit point): the step fails
       report.failure = e.what();
       return report;
@@ -163,7 +175,10 @@ StepReport NewtonDriver::newton(double lambda, const NewtonSettings& s, double r
     for (int b = 0; b < tries && !accepted; ++b) {
       u_ = start;
       u_.add(alpha, du);
-      for (Term* term : terms_) term->take_step(alpha);
+      for (Term* term : terms_) {
+        term->take_step(alpha);
+        term->restore(u_, system_);  // the step's second-order miss of a term's own equation
+      }
       const bool full = b == 0;
       if (!assemble(lambda, trial_r, /*tangent=*/full)) {
         alpha /= 2;

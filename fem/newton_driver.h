@@ -114,6 +114,9 @@ class NewtonDriver {
   double static_factor(double lambda) const { return static_done_ + lambda * (1 - static_done_); }
   StepReport newton(double lambda, const NewtonSettings& s, double reference, const HandoverError& handover_error,
                     bool frame);
+  // r plus the rank-one load of the term that has one (its own equation eliminated): the step's
+  // right-hand side; r itself when no term has one. Valid until the next call.
+  const dealii::Vector<double>& eliminated(const dealii::Vector<double>& r);
   std::vector<double> unknowns() const;
   void set_unknowns(const std::vector<double>& values);
 

@@ -58,6 +58,10 @@ class Term {
   // from where it was when the step was completed.
   virtual void complete_step(const LinearSystem& /*system*/, dealii::Vector<double>& /*du*/) {}
   virtual void take_step(double /*alpha*/) {}
+  // u was moved by a linear prediction (a frame's first guess): restore the term's own equation to
+  // first order by moving u and the unknown along a direction that keeps the force balance to first
+  // order (given by the factorisation of a recent tangent, `system`). Returns whether u moved.
+  virtual bool restore(dealii::Vector<double>& /*u*/, LinearSystem& /*system*/) { return false; }
   // The term's own equation holds (a cavity's volume law), beside the residual's norm.
   virtual bool satisfied() const { return true; }
   // The term's residual is minus the gradient of an energy of u alone (hyperelasticity, dead loads,
