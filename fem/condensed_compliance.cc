@@ -78,7 +78,10 @@ FullMatrix<double> CondensedCompliance::compute(LinearSystem& system, const std:
   if (solve_columns) {
     const bool warm = z.size() == columns;
     if (!warm) z.assign(columns, Vector<double>(n));
-    for (unsigned int k = 0; k < columns; ++k) system.solve(h[k], z[k], kComplianceTolerance, /*zero_guess=*/!warm);
+    // A first compliance to kComplianceTolerance; a frame's, whose Galerkin update failed, to the
+    // residual the update would have accepted (its error in W is of the same order).
+    const double tolerance = warm ? std::max(kComplianceTolerance, galerkin_tolerance) : kComplianceTolerance;
+    for (unsigned int k = 0; k < columns; ++k) system.solve(h[k], z[k], tolerance, /*zero_guess=*/!warm);
   }
   times.refined = solve_columns;
   times.factorisation_s = system.times.factorisation_s;

@@ -1,5 +1,5 @@
 // The anatomy scene's mesh (issue 15's conformity acceptance): `fetouch solve` meshes the shipped
-// fetus_anatomy scene into an empty cache, and the cached .vtu is read back with VTK and checked
+// default scene (fetus_phantom.yaml, the anatomy) into an empty cache, and the cached .vtu is read back with VTK and checked
 // against the phantom's label map (made here by the imaging library, the ground truth the mesher
 // starts from): every interface face held by exactly two tetrahedra of different regions, no point
 // twice, each region's volume within 3 % of its labels' voxels, every region's smallest dihedral
@@ -55,7 +55,7 @@ TEST(AnatomyMesh, RegionsAreConformingKeepTheirVolumesAndQuality) {
   const fs::path dir = fs::temp_directory_path() / ("fetouch_anatomy_mesh_" + std::to_string(::getpid()));
   fs::remove_all(dir);
   fs::create_directories(dir);
-  const fs::path scene = fs::path(FETOUCH_SOURCE_DIR) / "config" / "scenes" / "fetus_anatomy.yaml";
+  const fs::path scene = fs::path(FETOUCH_SOURCE_DIR) / "config" / "scenes" / "fetus_phantom.yaml";
   const auto r = run_command("FETOUCH_CACHE_DIR=" + (dir / "cache").string() + " " +
                              fetouch("solve --steps 1 --out " + (dir / "solve").string() + " " + scene.string()));
   ASSERT_EQ(r.exit_code, 0) << r.err;

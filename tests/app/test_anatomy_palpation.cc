@@ -1,4 +1,4 @@
-// Palpating the anatomy (issue 15): the shipped fetus_anatomy scene, pressed 4 mm deep over the
+// Palpating the anatomy (issue 15): the default scene (fetus_phantom.yaml, the anatomy), pressed 4 mm deep over the
 // fetal back (3 mm of fluid below the wall) and over fluid alone (the side of the sac), by real
 // `fetouch replay` runs. What the haptic loop was handed (the condensed normal stiffness of the last
 // frame of the hold, from the recording) is checked against a second method, the static nonlinear
@@ -57,7 +57,7 @@ Felt palpate(const Site& site, const fs::path& dir) {
                 "trajectory poke --at %g %g %g --normal %g %g %g --approach 0.012 --depth 0.004 --times 0.5 0.4 0.8 0.1 0.1 --out %s",
                 site.at[0], site.at[1], site.at[2], site.normal[0], site.normal[1], site.normal[2], trajectory.c_str());
   EXPECT_EQ(run_command(fetouch(command)).exit_code, 0);
-  EXPECT_TRUE(write_scene_variant(scenes / "fetus_anatomy.yaml", "trajectories/palpate_back.csv", trajectory.string(), scene));
+  EXPECT_TRUE(write_scene_variant(scenes / "fetus_phantom.yaml", "trajectories/palpate_back.csv", trajectory.string(), scene));
   const fs::path out = dir / (std::string(site.name) + "_replay");
   const auto r = run_command(fetouch("replay --json --mesh-every 0 --out " + out.string() + " " + scene.string()));
   EXPECT_EQ(r.exit_code, 0) << r.err;

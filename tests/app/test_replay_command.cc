@@ -102,7 +102,7 @@ TEST(ReplayCommand, FetusPhantomSceneMeshesOnceAndReplays) {
   const fs::path dir = fs::temp_directory_path() / ("fetouch_replay_fetus_" + std::to_string(::getpid()));
   fs::remove_all(dir);
   const std::string env = "FETOUCH_CACHE_DIR=" + (dir / "cache").string() + " ";
-  const std::string scene = std::string(FETOUCH_SOURCE_DIR) + "/config/scenes/fetus_phantom.yaml";
+  const std::string scene = std::string(FETOUCH_SOURCE_DIR) + "/config/scenes/fetus_simple.yaml";
   std::vector<app::Recording> runs;
   for (const char* name : {"a", "b"}) {
     const auto r = run_command(env + fetouch("replay --json --mesh-every 0 --out " + (dir / name).string() + " " + scene));

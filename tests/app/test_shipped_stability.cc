@@ -119,7 +119,7 @@ TEST(ShippedScenes, NoForceOscillationGrowsAndEveryFrameIsStable) {
   const fs::path source = fs::path(FETOUCH_SOURCE_DIR) / "config" / "scenes";
   std::vector<Case> cases{{"block_press.yaml", ""},          {"fetus_phantom.yaml", ""},
                           {"fetus_two_users.yaml", ""},      {"fetus_two_users_simple.yaml", ""},
-                          {"fetus_anatomy.yaml", ""}};
+                          {"fetus_simple.yaml", ""}};
   if (fs::exists(fs::path(FETOUCH_SOURCE_DIR) / ".." / "shared" / "data" / "ultrasound")) {
     cases.push_back({"spine_phantom.yaml", ""});
     cases.push_back({"spine_phantom.yaml", "trajectories/spine_press_slide.csv", false});

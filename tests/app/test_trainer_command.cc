@@ -87,7 +87,7 @@ TEST(TrainerCommand, EveryShippedSceneOpensRunsAndClosesWithAScreenshot) {
 TEST(TrainerCommand, TheProbesRegionChangesBetweenRestAndMidPress) {
   ASSERT_TRUE(std::getenv("DISPLAY")) << "run under xvfb-run -a";
   const fs::path dir = scratch("press");
-  const std::string scene = (fs::path(FETOUCH_SOURCE_DIR) / "config" / "scenes" / "fetus_phantom.yaml").string();
+  const std::string scene = (fs::path(FETOUCH_SOURCE_DIR) / "config" / "scenes" / "fetus_simple.yaml").string();
   // The scene's poke reaches the surface at 0.6 s and is 8 mm deep from 1.1 s to 2.1 s.
   const auto rest = run_command(fetouch("trainer " + scene + " --duration 0.3 --screenshot " + (dir / "rest.png").string() +
                                         " --out " + dir.string()));
@@ -109,7 +109,7 @@ TEST(TrainerCommand, TheProbesRegionChangesBetweenRestAndMidPress) {
 }
 
 TEST(TrainerCommand, WithoutADisplayItSaysToUseXvfbAndExits2) {
-  const std::string scene = (fs::path(FETOUCH_SOURCE_DIR) / "config" / "scenes" / "fetus_phantom.yaml").string();
+  const std::string scene = (fs::path(FETOUCH_SOURCE_DIR) / "config" / "scenes" / "fetus_simple.yaml").string();
   const auto r = run_command("env -u DISPLAY -u WAYLAND_DISPLAY " + fetouch("trainer " + scene + " --duration 1"));
   EXPECT_EQ(r.exit_code, 2);
   EXPECT_NE(r.err.find("xvfb-run -a"), std::string::npos) << r.err;

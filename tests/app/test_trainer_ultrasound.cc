@@ -62,7 +62,7 @@ TEST(TrainerUltrasound, TheMidPressImageIsTheVolumeSampledThroughTheSolversDispl
   const fs::path dir = fs::temp_directory_path() / ("fetouch_trainer_ultrasound_" + std::to_string(::getpid()));
   fs::remove_all(dir);
   fs::create_directories(dir);
-  const std::string scene = (fs::path(FETOUCH_SOURCE_DIR) / "config" / "scenes" / "fetus_phantom.yaml").string();
+  const std::string scene = (fs::path(FETOUCH_SOURCE_DIR) / "config" / "scenes" / "fetus_simple.yaml").string();
   const auto phantom = run_command(fetouch("phantom --seed 1 --spacing 1 --out " + (dir / "phantom").string()));
   ASSERT_EQ(phantom.exit_code, 0) << phantom.err;
   // Mid-press: the scene's poke is 8 mm deep from 1.1 s to 2.1 s.

@@ -73,7 +73,7 @@ class TrainerWindowTest : public ::testing::Test {
 TEST_F(TrainerWindowTest, PauseStopsTimeResetReturnsToRestRecordReplays) {
   app::trainer::WindowOptions options;
   options.out = out_;
-  TrainerWindow w(scene("fetus_phantom.yaml"), {}, options);
+  TrainerWindow w(scene("fetus_simple.yaml"), {}, options);
   w.show();
   QApplication::setActiveWindow(&w);  // shortcuts go to the active window (Xvfb has no window manager)
   ASSERT_TRUE(w.session());
@@ -101,7 +101,7 @@ TEST_F(TrainerWindowTest, PauseStopsTimeResetReturnsToRestRecordReplays) {
   QTest::keyClick(&w, Qt::Key_R, Qt::ControlModifier);
   EXPECT_FALSE(w.recording());
   ASSERT_TRUE(fs::exists(take));
-  const auto replay = run_command(fetouch("replay " + (fs::path(FETOUCH_SOURCE_DIR) / "config/scenes/fetus_phantom.yaml").string() +
+  const auto replay = run_command(fetouch("replay " + (fs::path(FETOUCH_SOURCE_DIR) / "config/scenes/fetus_simple.yaml").string() +
                                           " --trajectory " + take.string() + " --mesh-every 0 --out " + (out_ / "replayed").string()));
   EXPECT_EQ(replay.exit_code, 0) << replay.err;
 }
@@ -126,7 +126,7 @@ TEST_F(TrainerWindowTest, TheMouseProbeFollowsTheCursorIntoTheTissue) {
   session.mouse = true;
   app::trainer::WindowOptions options;
   options.out = out_;
-  TrainerWindow w(scene("fetus_phantom.yaml"), session, options);
+  TrainerWindow w(scene("fetus_simple.yaml"), session, options);
   w.show();
   QApplication::setActiveWindow(&w);
   w.toggle_recording();  // a take from rest, recorded
@@ -161,7 +161,7 @@ TEST_F(TrainerWindowTest, TheMouseProbeFollowsTheCursorIntoTheTissue) {
     lowest = std::min(lowest, samples[k].normal_force), highest = std::max(highest, samples[k].normal_force);
   }
   EXPECT_LT(highest - lowest, 0.02 * held_force) << "settled";
-  const fs::path scene_file = fs::path(FETOUCH_SOURCE_DIR) / "config" / "scenes" / "fetus_phantom.yaml";
+  const fs::path scene_file = fs::path(FETOUCH_SOURCE_DIR) / "config" / "scenes" / "fetus_simple.yaml";
   const double d1 = static_depth(scene_file, patch, n, held_force, out_ / "solve1");
   const double f2 = held_force * depth / d1;
   const double d2 = static_depth(scene_file, patch, n, f2, out_ / "solve2");
@@ -182,7 +182,7 @@ TEST_F(TrainerWindowTest, SwitchingTheLocalModelIsAppliedOrRefusedWithTheReason)
   app::trainer::WindowOptions options;
   options.out = out_;
   {
-    TrainerWindow w(scene("fetus_phantom.yaml"), {}, options);
+    TrainerWindow w(scene("fetus_simple.yaml"), {}, options);
     w.show();
     QApplication::setActiveWindow(&w);
     ASSERT_EQ(w.local_model(), haptics::LocalModelKind::pi_smith);
@@ -222,7 +222,7 @@ TEST_F(TrainerWindowTest, SwitchingTheLocalModelIsAppliedOrRefusedWithTheReason)
     EXPECT_EQ(first_p, switched - 1);
   }
   // The default scene with its gains fixed.
-  std::ifstream in(fs::path(FETOUCH_SOURCE_DIR) / "config" / "scenes" / "fetus_phantom.yaml");
+  std::ifstream in(fs::path(FETOUCH_SOURCE_DIR) / "config" / "scenes" / "fetus_simple.yaml");
   std::stringstream text;
   text << in.rdbuf();
   const fs::path scenes = fs::path(FETOUCH_SOURCE_DIR) / "config" / "scenes";
@@ -252,7 +252,7 @@ TEST_F(TrainerWindowTest, SwitchingTheLocalModelIsAppliedOrRefusedWithTheReason)
 TEST_F(TrainerWindowTest, OpenRefusesABrokenSceneAndKeepsTheSessionThenOpensAnother) {
   app::trainer::WindowOptions options;
   options.out = out_;
-  TrainerWindow w(scene("fetus_phantom.yaml"), {}, options);
+  TrainerWindow w(scene("fetus_simple.yaml"), {}, options);
   w.show();
   QApplication::setActiveWindow(&w);
   QTest::qWait(600);

@@ -60,7 +60,7 @@ class RunCommand : public ::testing::Test {
                                         ::testing::UnitTest::GetInstance()->current_test_info()->name());
     fs::remove_all(dir_);
     fs::create_directories(dir_);
-    ASSERT_TRUE(write_scene_variant(kScenes / "fetus_phantom.yaml", kReplayDevice, "type: phantom", dir_ / "phantom.yaml"));
+    ASSERT_TRUE(write_scene_variant(kScenes / "fetus_simple.yaml", kReplayDevice, "type: phantom", dir_ / "phantom.yaml"));
   }
   void TearDown() override { fs::remove_all(dir_); }
 
@@ -98,7 +98,7 @@ TEST_F(RunCommand, TheStandinReceivesExactlyTheRecordedForcesAndAgreesWithTheOpe
   EXPECT_GT(peak, 0.2);  // the probe pressed the tissue
 
   // The same scene with the virtual operator in lockstep.
-  ASSERT_TRUE(write_scene_variant(kScenes / "fetus_phantom.yaml", kReplayDevice,
+  ASSERT_TRUE(write_scene_variant(kScenes / "fetus_simple.yaml", kReplayDevice,
                                   "type: operator\n      trajectory: trajectories/poke_fetus.csv", dir_ / "operator.yaml"));
   const auto l = run_command(fetouch("-q replay --mesh-every 0 --out " + (dir_ / "lockstep").string() + " " +
                                      (dir_ / "operator.yaml").string()));
