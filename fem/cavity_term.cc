@@ -150,8 +150,7 @@ void CavityTerm::complete_step(const LinearSystem& /*system*/, Vector<double>& d
 bool CavityTerm::restore(Vector<double>& u, LinearSystem& system) {
   if (stiffness_ == 0 || system.rank_one_g() != &g_) return false;
   const double residual = wall_.volume(u.begin()) - law_.volume(pressure_, reference_volume_);
-  w_.reinit(u.size());
-  system.apply_factorisation(g_.begin(), w_.begin(), 1);
+  system.apply_factorisation_to_rank_one_g(w_);
   const double t = -stiffness_ * residual;
   u.add(t, w_);
   pressure_ += t * (1 - stiffness_ * (g_ * w_));

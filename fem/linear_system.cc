@@ -125,6 +125,13 @@ void LinearSystem::multiply(const Vector<double>& x, Vector<double>& y) const {
   if (rank_one_c_ != 0) y.add(rank_one_c_ * (*rank_one_g_ * x), *rank_one_g_);
 }
 
+void LinearSystem::apply_factorisation_to_rank_one_g(Vector<double>& w) {
+  w.reinit(d_.n_dofs(), /*omit_zeroing_entries=*/true);
+  TangentSystem::SolveStats stats = tangent_.apply_factorisation_to_rank_one_g(w.begin());
+  stats.iterations = 1;
+  account(stats);
+}
+
 void LinearSystem::apply_factorisation(const double* b, double* x, int columns) {
   TangentSystem::SolveStats stats = tangent_.apply_factorisation(b, x, columns);
   stats.iterations = 1;  // one blocked application

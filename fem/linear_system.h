@@ -74,6 +74,8 @@ class LinearSystem {
   void multiply(const dealii::Vector<double>& x, dealii::Vector<double>& y) const;
   // X = P^-1 B, `columns` right-hand sides (column-major), P the factorisation.
   void apply_factorisation(const double* b, double* x, int columns);
+  // w = (P + c g g')^-1 g, g the rank-one part's (set_rank_one).
+  void apply_factorisation_to_rank_one_g(dealii::Vector<double>& w);
 
   // The tangent was assembled anew (drops y).
   void tangent_changed() { y_current_ = false; }

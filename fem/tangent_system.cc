@@ -331,6 +331,15 @@ TangentSystem::SolveStats TangentSystem::apply_factorisation(const double* b, do
   return stats;
 }
 
+TangentSystem::SolveStats TangentSystem::apply_factorisation_to_rank_one_g(double* w) {
+  SolveStats stats;
+  const std::vector<double>& pg = factorised_g(stats);
+  const std::size_t n = rows();
+  const double scale = 1 / (1 + rank_one_c_ * std::inner_product(rank_one_g_, rank_one_g_ + n, pg.begin(), 0.0));
+  for (std::size_t i = 0; i < n; ++i) w[i] = scale * pg[i];
+  return stats;
+}
+
 const std::vector<double>& TangentSystem::factorised_g(SolveStats& stats) {
   if (!pg_current_ || pg_factorisations_ != factorisations_) {
     pg_.assign(rows(), 0.0);

@@ -95,6 +95,9 @@ class TangentSystem {
   // factorisation (made first if there is none or one is due): one preconditioner application per
   // column, in a single blocked triangular solve. Not a solve with K unless just refactored.
   SolveStats apply_factorisation(const double* b, double* x, int columns);
+  // w = (P + c g g')^-1 g for the rank-one part's own g: P^-1 g (kept while g and P stay the same)
+  // scaled by 1 / (1 + c g'P^-1 g), so at most one triangular solve.
+  SolveStats apply_factorisation_to_rank_one_g(double* w);
   // The next solve factorises the current K first (after load-step cuts, a new pattern, ...).
   void refactor_next() { refactor_ = true; }
   // The start of a solver call: `frame` true for a haptic frame (factorisations in the background),
