@@ -1,6 +1,7 @@
 #include "fem/fem_environment.h"
 
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <stdexcept>
@@ -59,9 +60,25 @@ void FemEnvironment::solve(const std::vector<haptics::ContactSample>& samples, l
     const Eigen::Vector3d& n = last_good_.frames[c].normal;
     const Eigen::Vector3d along = (x - anchors_[c]) - (x - anchors_[c]).dot(n) * n;
     const dealii::Tensor<1, 3> motion({along.x(), along.y(), along.z()});
-    if (motion.norm() <= 0.25 * solver_->patch_radius(c)) continue;
+    const double radius = solver_->patch_radius(c);
+    if (motion.norm() <= 0.25 * radius) continue;
+    // A move of more than a radius (a probe that jumped across the surface in one frame) carries
+    // the patch's whole load to a place the state knows nothing of, which no load step can cut
+    // down: the patch slides there in steps of half a radius, the tissue solved under its force
+    // after each, and stays at the last place a step reached if one fails.
+    const int steps = static_cast<int>(std::ceil(motion.norm() / (0.5 * radius)));
+    const dealii::Point<3> from = solver_->patch_center(c);
     try {
-      solver_->move_contact_patch(c, solver_->boundary_point_nearest(solver_->patch_center(c) + motion, /*deformed=*/false));
+      dealii::Point<3> reached = from;
+      for (int k = 1; k <= steps; ++k) {
+        const dealii::Point<3> next = solver_->boundary_point_nearest(from + (double(k) / steps) * motion, /*deformed=*/false);
+        solver_->move_contact_patch(c, next);
+        if (k < steps && !solver_->solve(newton_).converged) {
+          solver_->move_contact_patch(c, reached);  // where the rolled-back state has it
+          break;
+        }
+        reached = next;
+      }
       anchors_[c] = x;
       ++patch_moves_;
     } catch (const std::invalid_argument&) {
@@ -73,7 +90,8 @@ void FemEnvironment::solve(const std::vector<haptics::ContactSample>& samples, l
     for (int d = 0; d < 3; ++d) force[d] = samples[c].force(d);
     solver_->set_patch_force(c, force);
   }
-  const SolveReport report = solver_->solve(newton_);
+  last_report_ = solver_->solve(newton_);
+  const SolveReport& report = last_report_;
   std::string failure = report.failure;
   if (report.converged) {
     describe(out);

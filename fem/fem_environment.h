@@ -34,6 +34,8 @@ class FemEnvironment final : public haptics::Environment {
   QuasiStaticSolver& solver() { return *solver_; }
   void set_follow_probes(bool follow) { follow_ = follow; }
   long patch_moves() const { return patch_moves_; }
+  // The last frame's solve: iterations, cuts, where its time went (studies read it).
+  const SolveReport& last_report() const { return last_report_; }
 
  private:
   void describe(haptics::EnvironmentUpdate& out);
@@ -44,6 +46,7 @@ class FemEnvironment final : public haptics::Environment {
   bool follow_ = true;
   std::vector<Eigen::Vector3d> anchors_;  // each probe's position when its patch was last placed
   long patch_moves_ = 0;
+  SolveReport last_report_;
 };
 
 }  // namespace fetouch::fem

@@ -91,6 +91,16 @@ void NewtonDriver::set_unknowns(const std::vector<double>& values) {
   for (std::size_t i = 0; i < terms_.size(); ++i) terms_[i]->set_unknown(values[i]);
 }
 
+// A restoration is a second-order correction: when the tangent it needs cannot be factorised (a
+// state past a limit point), the state stays as it is, and the Newton step that follows meets the
+// same singular tangent and fails the step cleanly (rolled back, cut), rather than throwing.
+void NewtonDriver::restore(Term& term) {
+  try {
+    term.restore(u_, system_);
+  } catch (const std::runtime_error&) {
+  }
+}
+
 // `reference`: the residual norm the tolerance is relative to; negative: the first iteration's.
 // `frame`: the solve continues from a converged one, so the accuracy policy and the frame's work
 // bound apply.
@@ -104,7 +114,7 @@ StepReport NewtonDriver::newton(double lambda, const NewtonSettings& s, double r
   // A frame starts from a linear prediction, which misses a liquid's volume to second order (its
   // stiffness turns that into large forces): the terms restore their own equations first.
   if (frame && tangent_assembled_)
-    for (Term* term : terms_) term->restore(u_, system_);
+    for (Term* term : terms_) restore(*term);
   for (int it = 0; it <= s.max_iterations; ++it) {
     // A frame's first correction solves with the previous frame's tangent, still in the matrix
     // (a frame moves the state little): the first assembly is the residual's alone. The trial step
@@ -177,7 +187,7 @@ StepReport NewtonDriver::newton(double lambda, const NewtonSettings& s, double r
       u_.add(alpha, du);
       for (Term* term : terms_) {
         term->take_step(alpha);
-        term->restore(u_, system_);  // the step's second-order miss of a term's own equation
+        restore(*term);  // the step's second-order miss of a term's own equation
       }
       const bool full = b == 0;
       if (!assemble(lambda, trial_r, /*tangent=*/full)) {

@@ -117,6 +117,8 @@ class NewtonDriver {
   // r plus the rank-one load of the term that has one (its own equation eliminated): the step's
   // right-hand side; r itself when no term has one. Valid until the next call.
   const dealii::Vector<double>& eliminated(const dealii::Vector<double>& r);
+  // term.restore(u), a factorisation that fails leaving u as it was.
+  void restore(Term& term);
   std::vector<double> unknowns() const;
   void set_unknowns(const std::vector<double>& values);
 

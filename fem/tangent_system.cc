@@ -242,7 +242,13 @@ void TangentSystem::factor(SolveStats& stats) {
   } else {
     check(code, "factorising the tangent");
   }
-  if (failed != PC_NOERROR) throw std::runtime_error("the tangent stiffness is singular (factorisation failed)");
+  if (failed != PC_NOERROR) {
+    // The preconditioner now holds a failed factorisation, which PETSc would keep (and apply) while
+    // the matrix is unchanged: a new solver, so that the next solve factorises afresh (a cut step's
+    // smaller load, say).
+    create_solver(method_ == Method::amg ? nullptr : solver_type_);
+    throw std::runtime_error("the tangent stiffness is singular (factorisation failed)");
+  }
   // Later solves keep this factorisation as the preconditioner while K changes.
   check(PCSetReusePreconditioner(p.pc, PETSC_TRUE), "keeping the factorisation");
   p.factored = true;

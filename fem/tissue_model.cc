@@ -1,5 +1,6 @@
 #include "fem/tissue_model.h"
 
+#include <atomic>
 #include <cmath>
 #include <stdexcept>
 
@@ -8,6 +9,8 @@
 namespace fetouch::fem {
 
 namespace {
+
+std::atomic<long> gravity_counter{0};
 
 bool selects(const config::Selector& s, const dealii::Point<3>& c) {
   switch (s.kind) {
@@ -29,7 +32,10 @@ bool selects(const config::Selector& s, const dealii::Point<3>& c) {
 
 }  // namespace
 
-std::unique_ptr<TissueModel> build_tissue_model(const config::Scene& scene) {
+long gravity_evaluations() { return gravity_counter.load(std::memory_order_relaxed); }
+
+std::unique_ptr<TissueModel> build_tissue_model(const config::Scene& scene,
+                                                const std::function<void(dealii::Triangulation<3>&)>& adjust) {
   auto model = std::make_unique<TissueModel>();
   model->mesh = build_tissue_mesh(scene.mesh, model->triangulation);
   model->material = make_material(scene.material);
@@ -77,6 +83,7 @@ std::unique_ptr<TissueModel> build_tissue_model(const config::Scene& scene) {
     model->region_faces[region.name] = faces;
   }
 
+  if (adjust) adjust(model->triangulation);
   model->solver = std::make_unique<QuasiStaticSolver>(model->triangulation, *model->material, model->degree);
   for (const auto& [id, material] : model->region_materials) model->solver->set_region_material(id, *material);
   // The linear solver: CG on a stale factorisation, or CG with algebraic multigrid past the size
@@ -100,6 +107,7 @@ std::unique_ptr<TissueModel> build_tissue_model(const config::Scene& scene) {
     for (int d = 0; d < 3; ++d) g[d] = scene.effects.gravity_m_per_s2[d];
     model->solver->apply_body_force(
         [g, density = model->region_density_kg_per_m3](const dealii::Point<3>&, unsigned int id) {
+          gravity_counter.fetch_add(1, std::memory_order_relaxed);
           const auto rho = density.find(id);
           return rho == density.end() ? dealii::Tensor<1, 3>() : rho->second * g;
         });

@@ -6,6 +6,7 @@
 
 #include <deal.II/grid/tria.h>
 
+#include <functional>
 #include <map>
 #include <memory>
 #include <optional>
@@ -34,7 +35,14 @@ struct TissueModel {
 
 // Throws std::runtime_error naming the region when a selector selects no face, and at the scene's
 // file and line when `materials` names a region the mesh lacks or leaves a region without one.
-std::unique_ptr<TissueModel> build_tissue_model(const config::Scene& scene);
+// `adjust`, if given, changes the triangulation after the scene's boundary regions have their ids
+// and before the solver is built on it (a study's distorted mesh, its own material or boundary ids).
+std::unique_ptr<TissueModel> build_tissue_model(const config::Scene& scene,
+                                                const std::function<void(dealii::Triangulation<3>&)>& adjust = {});
+
+// How many times the gravity of any scene has been evaluated (its body force at a point), over the
+// process: a scene that does not list gravity runs no gravity code, and this shows it.
+long gravity_evaluations();
 
 // The time stepping a scene asks for (effects inertia and damping; one step per solver frame), or
 // nothing for a quasi-static scene. Throws std::runtime_error for what the solver cannot do yet

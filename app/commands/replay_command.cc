@@ -23,9 +23,9 @@
 #include "app/recording.h"
 #include "app/scene_devices.h"
 #include "app/scene_mesh.h"
+#include "app/scene_rig.h"
 #include "app/session.h"
 #include "fem/fem_environment.h"
-#include "fem/tissue_model.h"
 
 namespace fetouch::app {
 
@@ -122,12 +122,6 @@ class DistributedEnvironment final : public haptics::Environment {
   std::vector<double> buffer_;
 };
 
-haptics::Trajectory probe_trajectory(const config::Probe& probe, int index, const ReplayOptions& o) {
-  const fs::path file = (index == 0 && !o.trajectory.empty()) ? fs::path(o.trajectory) : probe.device.trajectory;
-  if (file.empty()) throw std::runtime_error("probe " + probe.name + " has no trajectory (device.trajectory)");
-  return read_probe_trajectory(file, probe.name, index);
-}
-
 SessionSummary run_session(const config::Scene& scene, const ReplayOptions& o, const haptics::HapticLoopSettings& settings,
                            const fs::path* out, bool keep_forces, std::vector<Eigen::Vector3d>* patches = nullptr);
 
@@ -159,7 +153,7 @@ double settling_time(const std::vector<Eigen::Vector3d>& force, double period, d
 IdealComparison compare_with_ideal(const config::Scene& scene, const ReplayOptions& o) {
   IdealComparison c;
   const haptics::HapticLoopSettings base = loop_settings(scene);
-  const auto hold = probe_trajectory(scene.probes.front(), 0, o).longest_hold();
+  const auto hold = probe_trajectory(scene.probes.front(), 0, o.trajectory).longest_hold();
   c.hold_start_s = hold.first, c.hold_end_s = hold.second;
   haptics::HapticLoopSettings ideal_settings = base;
   ideal_settings.ratio = 1;
@@ -259,24 +253,14 @@ void write_summary(std::ostream& out, const ReplayOptions& o, const config::Scen
 // scene. With `out`, the recording, the meshes and the PVD are written there.
 SessionSummary run_session(const config::Scene& scene, const ReplayOptions& o, const haptics::HapticLoopSettings& settings,
                            const fs::path* out, bool keep_forces, std::vector<Eigen::Vector3d>* patches) {
-  log::info() << "building the tissue model of " << scene.name;
-  std::unique_ptr<fem::TissueModel> model = fem::build_tissue_model(scene);
-  std::vector<std::unique_ptr<haptics::Device>> devices;
+  SceneRig rig = build_scene_rig(scene, settings, o.trajectory);
+  if (patches) *patches = rig.patches;
+  std::vector<std::unique_ptr<haptics::Device>>& devices = rig.devices;
   SessionSettings session;
   session.loop = settings;
   session.keep_forces = keep_forces;
-  for (int p = 0; p < static_cast<int>(scene.probes.size()); ++p) {
-    const config::Probe& probe = scene.probes[p];
-    const haptics::Trajectory path = probe_trajectory(probe, p, o);
-    const Eigen::Vector3d& start = path.positions_m.front();
-    const dealii::Point<3> touch = model->solver->boundary_point_nearest(dealii::Point<3>(start[0], start[1], start[2]));
-    log::detail() << "probe " << probe.name << ": contact patch at (" << touch << ") m";
-    if (patches) patches->emplace_back(touch[0], touch[1], touch[2]);
-    model->solver->add_contact_patch(touch, probe.radius_m);
-    devices.push_back(make_device(probe, scene, settings, &path));
-    session.probes.push_back(probe.name);
-  }
-  fem::FemEnvironment environment(std::move(model->solver), model->newton);
+  session.probes = rig.probes;
+  fem::FemEnvironment& environment = *rig.environment;
   // Under MPI, rank 0 runs the session; the other ranks serve its solves until it is over.
   int rank = 0;
   MPI_Comm_rank(MPI_COMM_WORLD, &rank);

@@ -125,6 +125,7 @@ int run_run(const RunOptions& o) {
     }
     log::info() << "building the tissue model of " << scene.name;
     std::unique_ptr<fem::TissueModel> model = fem::build_tissue_model(scene);
+    if (const auto dynamics = fem::scene_dynamics(scene, model.get())) model->solver->enable_dynamics(*dynamics);
     SessionSettings session;
     session.loop = settings;
     for (int p = 0; p < static_cast<int>(scene.probes.size()); ++p) {

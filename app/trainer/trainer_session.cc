@@ -52,6 +52,8 @@ TrainerSession::TrainerSession(const config::Scene& scene, const TrainerOptions&
   log::info() << "building the tissue model of " << scene_.name;
   model_ = fem::build_tissue_model(scene_);
   fem::TissueModel* model = model_.get();
+  // Inertia (and damping): each frame's solve is one time step of the solver's period.
+  if (const auto dynamics = fem::scene_dynamics(scene_, model)) model->solver->enable_dynamics(*dynamics);
   fem::QuasiStaticSolver& solver = *model->solver;
   {
     fem::QuasiStaticSolver::DrawingMesh d = solver.drawing_mesh();

@@ -1,0 +1,41 @@
+#include "app/scene_rig.h"
+
+#include <stdexcept>
+#include <utility>
+
+#include "app/log.h"
+#include "app/recording.h"
+#include "app/scene_devices.h"
+
+namespace fetouch::app {
+
+haptics::Trajectory probe_trajectory(const config::Probe& probe, int index, const std::filesystem::path& first) {
+  const std::filesystem::path file = (index == 0 && !first.empty()) ? first : probe.device.trajectory;
+  if (file.empty()) throw std::runtime_error("probe " + probe.name + " has no trajectory (device.trajectory)");
+  return read_probe_trajectory(file, probe.name, index);
+}
+
+SceneRig build_scene_rig(const config::Scene& scene, const haptics::HapticLoopSettings& settings,
+                         const std::filesystem::path& first_trajectory) {
+  log::info() << "building the tissue model of " << scene.name;
+  SceneRig rig;
+  rig.model = fem::build_tissue_model(scene);
+  fem::TissueModel* model = rig.model.get();
+  // Inertia (and damping): each frame's solve is one time step of the solver's period.
+  if (const auto dynamics = fem::scene_dynamics(scene, model)) model->solver->enable_dynamics(*dynamics);
+  for (int p = 0; p < static_cast<int>(scene.probes.size()); ++p) {
+    const config::Probe& probe = scene.probes[p];
+    const haptics::Trajectory path = probe_trajectory(probe, p, first_trajectory);
+    const Eigen::Vector3d& start = path.positions_m.front();
+    const dealii::Point<3> touch = model->solver->boundary_point_nearest(dealii::Point<3>(start[0], start[1], start[2]));
+    log::detail() << "probe " << probe.name << ": contact patch at (" << touch << ") m";
+    rig.patches.emplace_back(touch[0], touch[1], touch[2]);
+    model->solver->add_contact_patch(touch, probe.radius_m);
+    rig.devices.push_back(make_device(probe, scene, settings, &path));
+    rig.probes.push_back(probe.name);
+  }
+  rig.environment = std::make_unique<fem::FemEnvironment>(std::move(model->solver), model->newton);
+  return rig;
+}
+
+}  // namespace fetouch::app
