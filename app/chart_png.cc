@@ -12,6 +12,7 @@
 #include <vtkPlotPoints.h>
 #include <vtkRenderWindow.h>
 #include <vtkRenderer.h>
+#include <vtkStringArray.h>
 #include <vtkTable.h>
 #include <vtkTextProperty.h>
 #include <vtkWindowToImageFilter.h>
@@ -49,6 +50,20 @@ void write_chart_png(const Chart& chart, const std::filesystem::path& png) {
   xy->GetTitleProperties()->SetFontSize(18);
   xy->GetAxis(vtkAxis::BOTTOM)->SetTitle(chart.x_label);
   xy->GetAxis(vtkAxis::LEFT)->SetTitle(chart.y_label);
+  xy->GetAxis(vtkAxis::BOTTOM)->SetLogScale(chart.log_x);
+  xy->GetAxis(vtkAxis::LEFT)->SetLogScale(chart.log_y);
+  if (!chart.x_ticks.empty()) {
+    vtkNew<vtkDoubleArray> positions;
+    vtkNew<vtkStringArray> labels;
+    for (std::size_t i = 0; i < chart.x_ticks.size(); ++i) {
+      positions->InsertNextValue(static_cast<double>(i));
+      labels->InsertNextValue(chart.x_ticks[i]);
+    }
+    vtkAxis* bottom = xy->GetAxis(vtkAxis::BOTTOM);
+    bottom->SetCustomTickPositions(positions, labels);
+    bottom->SetRange(-0.6, static_cast<double>(chart.x_ticks.size()) - 0.4);
+    bottom->SetBehavior(vtkAxis::FIXED);
+  }
   xy->SetShowLegend(true);
   xy->GetLegend()->SetHorizontalAlignment(vtkChartLegend::RIGHT);
   xy->GetLegend()->SetVerticalAlignment(vtkChartLegend::TOP);
@@ -65,7 +80,7 @@ void write_chart_png(const Chart& chart, const std::filesystem::path& png) {
     }
     table->AddColumn(x);
     table->AddColumn(y);
-    vtkPlot* plot = xy->AddPlot(s.points ? vtkChart::POINTS : vtkChart::LINE);
+    vtkPlot* plot = xy->AddPlot(s.bars ? vtkChart::BAR : s.points ? vtkChart::POINTS : vtkChart::LINE);
     plot->SetInputData(table, 0, 1);
     plot->SetColor(s.color[0], s.color[1], s.color[2], 255);
     plot->SetWidth(s.width);

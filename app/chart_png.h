@@ -17,12 +17,15 @@ struct ChartSeries {
   std::array<unsigned char, 3> color{0, 0, 0};
   bool points = false;                  // markers instead of a line
   float width = 2.0f;                   // line width or marker size, pixels
+  bool bars = false;                    // bars (at x = 0, 1, 2, ...; Chart::x_ticks names them)
 };
 
 struct Chart {
   std::string title, x_label, y_label;
   std::vector<ChartSeries> series;
   int width = 1000, height = 700;
+  bool log_x = false, log_y = false;    // logarithmic axes (every value must be positive)
+  std::vector<std::string> x_ticks;     // bar charts: the label of bar 0, 1, 2, ...
 };
 
 // An X display to draw on ($DISPLAY set and not empty).

@@ -76,6 +76,7 @@ int run_cli(int argc, char** argv) {
   add_devices_command(app, exit_code);
   add_trainer_command(app, exit_code);
   add_trajectory_command(app, exit_code);
+  add_study_command(app, exit_code);
 
   app.parse_complete_callback([&]() {
     if (quiet) log::set_level(log::Level::error);

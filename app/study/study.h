@@ -1,0 +1,59 @@
+// `fetouch study`: tables and plots a researcher can put in a paper, from lockstep sessions of any
+// scene (docs/study.md). accuracy: what accuracy costs in time; effects: what each effect of a scene
+// costs; hard-cases: the solver's hard cases on the scene's tissue, each converged or cleanly cut.
+#pragma once
+
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "app/exit_codes.h"
+#include "app/study/study_table.h"
+#include "config/scene.h"
+
+namespace fetouch::app {
+
+constexpr int kStudyBadInput = kExitBadInput;
+
+struct AccuracyOptions : StudyOptions {
+  std::vector<int> mesh_levels{-2, -1, 0, 1};  // refinements added (generated), or element size / 1.5^level
+  std::vector<int> orders;                     // empty: 1 and 2 (the scene's own alone with --quick)
+  std::vector<double> tolerances{1e-3, 1e-5, 1e-8};
+  std::vector<int> ratios{10, 20, 50, 100};
+  std::vector<std::string> models;             // MODEL/HOLD; empty: all eight
+  double duration_s = 0;                       // of the trajectory; 0: all of it
+};
+
+struct AccuracyReference {
+  std::string text;
+  unsigned int dofs = 0;
+  long cells = 0, frames = 0, ticks = 0;
+  double wall_s = 0, frame_p99_ms = 0, self_check = 0;
+  std::vector<std::string> not_run;  // configurations that could not run, and why
+};
+
+int run_study_accuracy(const AccuracyOptions& options);
+
+struct EffectsOptions : StudyOptions {
+  double duration_s = 0;  // of the trajectory; 0: all of it (--quick: 1 s)
+};
+int run_study_effects(const EffectsOptions& options);
+
+struct HardCasesOptions : StudyOptions {
+  // Deliberately broken solver settings, to show that the battery can fail: Newton without its
+  // line search, and no load-step cuts.
+  bool no_line_search = false;
+  int max_cuts = -1;  // < 0: the battery's own (8)
+};
+// Exit 0 only when every case is sound.
+int run_study_hard_cases(const HardCasesOptions& options);
+
+// Refuses an --out that would replace the scene, its mesh or a trajectory; creates the folder.
+// Throws std::invalid_argument naming both.
+void prepare_study_folder(const std::filesystem::path& out, const std::string& scene_file, const config::Scene& scene);
+
+// STUDY/table.csv, STUDY/report.md, the plots, and the summary on stdout (JSON with --json).
+int write_accuracy_outputs(const AccuracyOptions& options, const config::Scene& scene, const StudyTable& table,
+                           const AccuracyReference& reference);
+
+}  // namespace fetouch::app
