@@ -268,10 +268,7 @@ int write_accuracy_outputs(const AccuracyOptions& o, const config::Scene& scene,
   json.end_array();
   json.end_object();
   json_text << "\n";
-  write_text_file(out / "study.json", json_text.str());
-  if (o.json) {
-    std::cout << json_text.str();
-  } else {
+  if (!publish_json(out, json_text.str(), o.json)) {
     std::printf("reference: %s, %u DOFs; self-check %s\n", ref.text.c_str(), ref.dofs,
                 std::isnan(ref.self_check) ? "not run (--quick)" : (format_number(ref.self_check) + " (must be < 1e-6)").c_str());
     std::printf("  %-9s %5s %7s %5s %9s %4s %-13s %9s %10s %8s\n", "axis", "mesh", "DOFs", "order", "tol", "N",

@@ -212,10 +212,7 @@ int run_study_effects(const EffectsOptions& o) {
   }
   json.end_array().end_object();
   json_text << "\n";
-  write_text_file(out / "study.json", json_text.str());
-  if (o.json) {
-    std::cout << json_text.str();
-  } else {
+  if (!publish_json(out, json_text.str(), o.json)) {
     std::printf("%-34s %10s %10s %10s\n", "run", "mean (ms)", "p50 (ms)", "p99 (ms)");
     for (const EffectRun& r : runs) std::printf("%-34s %10.3f %10.3f %10.3f\n", r.name.c_str(), r.mean_ms, r.p50_ms, r.p99_ms);
     std::printf("noise (the scene twice): %.3f ms; wrote %s and %s\n", noise, (out / "table.csv").string().c_str(),

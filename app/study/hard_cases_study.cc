@@ -463,10 +463,7 @@ int run_study_hard_cases(const HardCasesOptions& o) {
         .key("seconds").value(c.seconds).end_object();
   json.end_array().end_object();
   json_text << "\n";
-  write_text_file(out / "study.json", json_text.str());
-  if (o.json) {
-    std::cout << json_text.str();
-  } else {
+  if (!publish_json(out, json_text.str(), o.json)) {
     for (const Outcome& c : outcomes)
       std::printf("%-50s %-9s %4d it %3d cuts  min J %.3f  %6.2f s  %s\n", c.name.c_str(), c.sound ? "sound" : "NOT SOUND",
                   c.iterations, c.cuts, c.min_j, c.seconds, c.result.c_str());

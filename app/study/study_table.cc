@@ -83,6 +83,12 @@ StudyTable read_csv(const std::filesystem::path& file) {
   return table;
 }
 
+bool publish_json(const std::filesystem::path& out, const std::string& json_text, bool print) {
+  write_text_file(out / "study.json", json_text);
+  if (print) std::fwrite(json_text.data(), 1, json_text.size(), stdout);
+  return print;
+}
+
 std::vector<bool> pareto_optimal(const std::vector<double>& cost, const std::vector<double>& error) {
   const std::size_t n = cost.size();
   std::vector<bool> optimal(n, false);

@@ -34,6 +34,10 @@ struct PowerFit {
 };
 PowerFit fit_power_law(const std::vector<double>& x, const std::vector<double>& y);
 
+// Writes DIR/study.json and, with --json, prints it; returns whether it printed it (the caller
+// prints its plain summary otherwise).
+bool publish_json(const std::filesystem::path& out, const std::string& json_text, bool print);
+
 struct StudyOptions {
   std::string scene, out = "fetouch-study";
   bool json = false, quick = false;
