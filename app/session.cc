@@ -20,18 +20,18 @@
 
 namespace fetouch::app {
 
+double percentile(std::vector<double> values, double p) {
+  if (values.empty()) return 0;
+  std::sort(values.begin(), values.end());
+  const auto rank = static_cast<std::size_t>(std::ceil(p * double(values.size())));
+  return values[std::min(rank == 0 ? 0 : rank - 1, values.size() - 1)];
+}
+
 namespace {
 
 // The median, 99th percentile and largest of `values` (zeros when there are none).
-void spread(std::vector<double> values, double& p50, double& p99, double& max) {
-  p50 = p99 = max = 0;
-  if (values.empty()) return;
-  std::sort(values.begin(), values.end());
-  const auto at = [&](double p) {
-    const std::size_t i = static_cast<std::size_t>(std::ceil(p * double(values.size()))) - 1;
-    return values[std::min(i, values.size() - 1)];
-  };
-  p50 = at(0.5), p99 = at(0.99), max = values.back();
+void spread(const std::vector<double>& values, double& p50, double& p99, double& max) {
+  p50 = percentile(values, 0.5), p99 = percentile(values, 0.99), max = percentile(values, 1);
 }
 
 // /frames/mode's codes (docs/replay.md) are the enumerators' values.

@@ -115,6 +115,9 @@ SessionSummary run_lockstep(haptics::Environment& environment, std::vector<std::
 SessionSummary run_realtime(haptics::Environment& environment, std::vector<std::unique_ptr<haptics::Device>>& devices,
                             const SessionSettings& settings);
 
+// The p-quantile (0..1) of values by nearest rank (ceil(p n)-th smallest); 0 for none.
+double percentile(std::vector<double> values, double p);
+
 // The cores run_realtime leaves the solver's threads: all the process may use but the haptic
 // thread's (when it has one of its own).
 int realtime_solver_cores(const SessionSettings& settings);

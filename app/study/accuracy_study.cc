@@ -20,6 +20,7 @@
 #include "app/scene_devices.h"
 #include "app/scene_mesh.h"
 #include "app/study/study.h"
+#include "app/session.h"
 #include "app/study/study_session.h"
 #include "haptics/local_model.h"
 
@@ -127,11 +128,11 @@ double max_of(const std::vector<double>& v) {
 
 int run_study_accuracy(const AccuracyOptions& o) {
   std::optional<config::Scene> loaded = load_scene_or_report(o.scene);
-  if (!loaded) return kStudyBadInput;
+  if (!loaded) return kExitBadInput;
   const config::Scene base = std::move(*loaded);
   if (base.probes.empty()) {
     std::cerr << "error: " << o.scene << ": the scene has no probes to replay\n";
-    return kStudyBadInput;
+    return kExitBadInput;
   }
   AccuracyOptions a = o;
   if (o.quick) {
@@ -177,7 +178,7 @@ int run_study_accuracy(const AccuracyOptions& o) {
     if (slash == std::string::npos || !haptics::parse_local_model(text.substr(0, slash), model) ||
         (text.substr(slash + 1) != "zoh" && text.substr(slash + 1) != "foh")) {
       std::cerr << "error: --models: " << text << " is not MODEL/HOLD (MODEL p, pi, smith or pi_smith; HOLD zoh or foh)\n";
-      return kStudyBadInput;
+      return kExitBadInput;
     }
     const auto hold = text.substr(slash + 1) == "foh" ? haptics::HoldKind::foh : haptics::HoldKind::zoh;
     add("model", [model, hold](Configuration& c) { c.model = model, c.hold = hold; });
@@ -268,13 +269,13 @@ int run_study_accuracy(const AccuracyOptions& o) {
     std::vector<std::string> row = {c.axis, std::to_string(c.level), std::to_string(r.cells), std::to_string(r.dofs),
                                     std::to_string(c.order), format_number(c.tolerance), std::to_string(c.ratio),
                                     haptics::to_string(c.model), haptics::to_string(c.hold),
-                                    format_number(percentile(solve_ms, 50)), format_number(percentile(solve_ms, 99)),
-                                    format_number(percentile(solve_ms, 100)), format_number(1e3 * c.ratio * r.period_s),
+                                    format_number(percentile(solve_ms, 0.5)), format_number(percentile(solve_ms, 0.99)),
+                                    format_number(percentile(solve_ms, 1)), format_number(1e3 * c.ratio * r.period_s),
                                     format_number(newton / frames), std::to_string(newton_max), format_number(linear / frames),
                                     std::to_string(cuts), std::to_string(r.newton_failures), format_number(max_of(e.rms_relative)),
                                     format_number(max_of(e.peak_n)), format_number(max_of(e.felt_relative)),
                                     format_number(own), format_number(discretisation),
-                                    percentile(solve_ms, 99) <= 1e3 * c.ratio * r.period_s ? "1" : "0"};
+                                    percentile(solve_ms, 0.99) <= 1e3 * c.ratio * r.period_s ? "1" : "0"};
     for (std::size_t p = 0; p < base.probes.size(); ++p)
       for (const double v : {e.rms_relative[p], e.peak_n[p], e.felt_relative[p]}) row.push_back(format_number(v));
     row.emplace_back();
@@ -295,7 +296,7 @@ int run_study_accuracy(const AccuracyOptions& o) {
   described.ticks = ref.ticks, described.wall_s = ref.wall_s, described.self_check = self_check;
   std::vector<double> p99_ref;
   for (const StudyFrame& f : ref.frames) p99_ref.push_back(1e3 * f.solve_s);
-  described.frame_p99_ms = percentile(p99_ref, 99);
+  described.frame_p99_ms = percentile(p99_ref, 0.99);
   described.not_run = not_run;
   return write_accuracy_outputs(a, base, table, described);
 }

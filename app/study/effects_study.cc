@@ -17,6 +17,7 @@
 #include "app/scene_devices.h"
 #include "app/scene_mesh.h"
 #include "app/study/study.h"
+#include "app/session.h"
 #include "app/study/study_session.h"
 #include "fem/tissue_model.h"
 
@@ -64,11 +65,11 @@ std::string ms(double x) {
 
 int run_study_effects(const EffectsOptions& o) {
   std::optional<config::Scene> loaded = load_scene_or_report(o.scene);
-  if (!loaded) return kStudyBadInput;
+  if (!loaded) return kExitBadInput;
   config::Scene base = std::move(*loaded);
   if (base.probes.empty()) {
     std::cerr << "error: " << o.scene << ": the scene has no probes to replay\n";
-    return kStudyBadInput;
+    return kExitBadInput;
   }
   const fs::path out(o.out);
   prepare_study_folder(out, o.scene, base);
@@ -100,7 +101,7 @@ int run_study_effects(const EffectsOptions& o) {
     for (const StudyFrame& f : r.run.frames) times.push_back(1e3 * f.solve_s), r.newton += f.newton_iterations;
     const double frames = std::max<double>(1, static_cast<double>(times.size()));
     r.mean_ms = std::accumulate(times.begin(), times.end(), 0.0) / frames;
-    r.p50_ms = percentile(times, 50), r.p99_ms = percentile(times, 99), r.newton /= frames;
+    r.p50_ms = percentile(times, 0.5), r.p99_ms = percentile(times, 0.99), r.newton /= frames;
     runs.push_back(std::move(r));
     progress.update(static_cast<long>(runs.size()));
   };

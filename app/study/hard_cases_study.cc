@@ -383,11 +383,11 @@ int run_study_hard_cases(const HardCasesOptions& o) {
     scene = builtin_block();
   } else {
     std::optional<config::Scene> loaded = load_scene_or_report(o.scene);
-    if (!loaded) return kStudyBadInput;
+    if (!loaded) return kExitBadInput;
     scene = std::move(*loaded);
     if (scene.probes.empty()) {
       std::cerr << "error: " << o.scene << ": the scene has no probe to say where the cases press\n";
-      return kStudyBadInput;
+      return kExitBadInput;
     }
   }
   const fs::path out(o.out);

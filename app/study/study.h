@@ -13,8 +13,6 @@
 
 namespace fetouch::app {
 
-constexpr int kStudyBadInput = kExitBadInput;
-
 struct AccuracyOptions : StudyOptions {
   std::vector<int> mesh_levels{-2, -1, 0, 1};  // refinements added (generated), or element size / 1.5^level
   std::vector<int> orders;                     // empty: 1 and 2 (the scene's own alone with --quick)

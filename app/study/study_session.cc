@@ -57,13 +57,6 @@ class MeasuredEnvironment final : public haptics::Environment {
 
 }  // namespace
 
-double percentile(std::vector<double> values, double p) {
-  if (values.empty()) return 0;
-  std::sort(values.begin(), values.end());
-  const auto rank = static_cast<std::size_t>(std::ceil(p / 100 * static_cast<double>(values.size())));
-  return values[std::min(values.size() - 1, rank == 0 ? 0 : rank - 1)];
-}
-
 StudyRun run_study_session(const config::Scene& scene, const haptics::HapticLoopSettings& loop,
                            const StudyRunSettings& settings) {
   const auto start = Clock::now();

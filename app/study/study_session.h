@@ -46,7 +46,4 @@ struct StudyRunSettings {
 StudyRun run_study_session(const config::Scene& scene, const haptics::HapticLoopSettings& loop,
                            const StudyRunSettings& settings);
 
-// The p-th percentile (0..100) of values by nearest rank; 0 for none.
-double percentile(std::vector<double> values, double p);
-
 }  // namespace fetouch::app

@@ -6,7 +6,7 @@
 #include <filesystem>
 #include <limits>
 
-#include "app/study/study_session.h"
+#include "app/session.h"
 #include "app/study/study_table.h"
 
 namespace fetouch::app {
@@ -52,10 +52,10 @@ TEST(StudyTable, WrittenAndReadBackExactly) {
 }
 
 TEST(StudyTable, PercentileByNearestRank) {
-  EXPECT_EQ(percentile({5, 1, 4, 2, 3}, 50), 3);
-  EXPECT_EQ(percentile({5, 1, 4, 2, 3}, 99), 5);
+  EXPECT_EQ(percentile({5, 1, 4, 2, 3}, 0.5), 3);
+  EXPECT_EQ(percentile({5, 1, 4, 2, 3}, 0.99), 5);
   EXPECT_EQ(percentile({5, 1, 4, 2, 3}, 0), 1);
-  EXPECT_EQ(percentile({}, 50), 0);
+  EXPECT_EQ(percentile({}, 0.5), 0);
 }
 
 }  // namespace
