@@ -34,11 +34,11 @@ bool NewtonDriver::assemble(double lambda, Vector<double>& r, bool tangent, Vect
   AssemblyTarget target{r.begin(), internal ? internal->begin() : nullptr, tangent ? k.values() : nullptr, &system_};
   // This rank's cells first, summed over the ranks (every rank must take the same decision, then hold
   // the same sums); then the terms evaluated whole on every rank.
-  term_seconds.resize(terms_.size(), 0.0);
+  term_times.resize(terms_.size());
   const auto timed = [&](std::size_t i) {
     const auto term_start = std::chrono::steady_clock::now();
     const bool ok = terms_[i]->assemble(state, target);
-    term_seconds[i] += since(term_start);
+    term_times[i].assembly_s += since(term_start);
     return ok;
   };
   bool ok = true;
@@ -94,11 +94,23 @@ void NewtonDriver::set_unknowns(const std::vector<double>& values) {
 // A restoration is a second-order correction: when the tangent it needs cannot be factorised (a
 // state past a limit point), the state stays as it is, and the Newton step that follows meets the
 // same singular tangent and fails the step cleanly (rolled back, cut), rather than throwing.
-void NewtonDriver::restore(Term& term) {
-  try {
-    term.restore(u_, system_);
-  } catch (const std::runtime_error&) {
-  }
+void NewtonDriver::restore(std::size_t i) {
+  own(i, [&] {
+    try {
+      terms_[i]->restore(u_, system_);
+    } catch (const std::runtime_error&) {
+    }
+  });
+}
+
+template <class Work>
+void NewtonDriver::own(std::size_t i, const Work& work) {
+  term_times.resize(terms_.size());
+  const auto start = std::chrono::steady_clock::now();
+  const int iterations = system_.times.linear_iterations;
+  work();
+  term_times[i].other_s += since(start);
+  term_times[i].linear_iterations += system_.times.linear_iterations - iterations;
 }
 
 // `reference`: the residual norm the tolerance is relative to; negative: the first iteration's.
@@ -114,7 +126,7 @@ StepReport NewtonDriver::newton(double lambda, const NewtonSettings& s, double r
   // A frame starts from a linear prediction, which misses a liquid's volume to second order (its
   // stiffness turns that into large forces): the terms restore their own equations first.
   if (frame && tangent_assembled_)
-    for (Term* term : terms_) restore(*term);
+    for (std::size_t i = 0; i < terms_.size(); ++i) restore(i);
   for (int it = 0; it <= s.max_iterations; ++it) {
     // A frame's first correction solves with the previous frame's tangent, still in the matrix
     // (a frame moves the state little): the first assembly is the residual's alone. The trial step
@@ -164,7 +176,7 @@ StepReport NewtonDriver::newton(double lambda, const NewtonSettings& s, double r
       report.failure = e.what();
       return report;
     }
-    for (Term* term : terms_) term->complete_step(system_, du);
+    for (std::size_t i = 0; i < terms_.size(); ++i) own(i, [&] { terms_[i]->complete_step(system_, du); });
     // The line search. With an energy (every term conservative) and du a descent direction for it,
     // it follows the energy's slope along the step, g(a) = r(u + a du) . du (Bonet & Wood, Nonlinear
     // Continuum Mechanics for Finite Element Analysis, 2nd ed., section 9.5.3): the full step stands
@@ -185,9 +197,9 @@ StepReport NewtonDriver::newton(double lambda, const NewtonSettings& s, double r
     for (int b = 0; b < tries && !accepted; ++b) {
       u_ = start;
       u_.add(alpha, du);
-      for (Term* term : terms_) {
-        term->take_step(alpha);
-        restore(*term);  // the step's second-order miss of a term's own equation
+      for (std::size_t i = 0; i < terms_.size(); ++i) {
+        terms_[i]->take_step(alpha);
+        restore(i);  // the step's second-order miss of a term's own equation
       }
       const bool full = b == 0;
       if (!assemble(lambda, trial_r, /*tangent=*/full)) {
@@ -233,14 +245,14 @@ void NewtonDriver::extrapolate_path(const std::vector<std::pair<double, Vector<d
 }
 
 SolveReport NewtonDriver::solve(const NewtonSettings& s, const Predictor& predictor, const HandoverError& handover_error) {
-  term_seconds.assign(terms_.size(), 0.0);
+  term_times.assign(terms_.size(), SolveReport::TermTime());
   // A haptic frame: a solve that continues from a converged one, with a hand-over error estimate.
   const bool frame = loaded() && static_cast<bool>(handover_error);
   const Vector<double> initial = u_;
   const std::vector<double> initial_unknowns = unknowns();
-  for (Term* term : terms_) term->begin_solve(initial);
   assembly_s = 0;
   system_.times = LinearSystem::Times();
+  for (std::size_t i = 0; i < terms_.size(); ++i) own(i, [&] { terms_[i]->begin_solve(initial); });
   TangentSystem& tangent = system_.tangent();
   const int factorisations = tangent.factorisations();
   SolveReport report;
@@ -304,7 +316,7 @@ SolveReport NewtonDriver::solve(const NewtonSettings& s, const Predictor& predic
   report.converged = true;
   times();
   static_done_ = 1;
-  for (Term* term : terms_) term->accept(u_);
+  for (std::size_t i = 0; i < terms_.size(); ++i) own(i, [&] { terms_[i]->accept(u_); });
   return report;
 }
 

@@ -69,7 +69,17 @@ struct SolveReport {
   double assembly_s = 0, factorisation_s = 0, solve_s = 0;
   int linear_iterations = 0;  // CG iterations preconditioned by an earlier factorisation
   int factorisations = 0;
-  std::vector<std::pair<std::string, double>> term_assembly_s;  // each term's share of assembly_s
+  // A background factorisation was under way during the solve (the worker shares the machine).
+  bool background = false;
+  // Each term's own time: its assembly (part of assembly_s) and the rest of its own work (a cavity's
+  // restorations and step completions, which solve with the factorisation: part of solve_s), with
+  // the linear iterations that work took.
+  struct TermTime {
+    std::string name;
+    double assembly_s = 0, other_s = 0;
+    int linear_iterations = 0;
+  };
+  std::vector<TermTime> terms;
 };
 
 class NewtonDriver {
@@ -94,8 +104,8 @@ class NewtonDriver {
   // of the points handed to the haptic loop, m (NewtonSettings::position_tolerance_m); null: no
   // estimate, the policy is off.
   using HandoverError = std::function<double(const dealii::Vector<double>& r)>;
-  // The time each term's assembly took over the last solve, s, in the terms' order.
-  std::vector<double> term_seconds;
+  // Each term's own time over the last solve, in the terms' order (SolveReport::terms, unnamed).
+  std::vector<SolveReport::TermTime> term_times;
   SolveReport solve(const NewtonSettings& settings, const Predictor& predictor = {},
                     const HandoverError& handover_error = {});
 
@@ -117,8 +127,11 @@ class NewtonDriver {
   // r plus the rank-one load of the term that has one (its own equation eliminated): the step's
   // right-hand side; r itself when no term has one. Valid until the next call.
   const dealii::Vector<double>& eliminated(const dealii::Vector<double>& r);
-  // term.restore(u), a factorisation that fails leaving u as it was.
-  void restore(Term& term);
+  // term i's restore(u), a factorisation that fails leaving u as it was.
+  void restore(std::size_t i);
+  // Runs `work` of term i's own (not its assembly), timed against it.
+  template <class Work>
+  void own(std::size_t i, const Work& work);
   std::vector<double> unknowns() const;
   void set_unknowns(const std::vector<double>& values);
 

@@ -25,11 +25,15 @@ std::string describe_frame(const SolveReport& r, const ComplianceTimes& c) {
                 1e3 * r.solve_s, r.linear_iterations, 1e3 * c.assembly_s, 1e3 * c.factorisation_s, 1e3 * c.solves_s,
                 c.linear_iterations, c.galerkin_residual, c.refined ? ", solved" : "");
   std::string text = line;
-  if (!r.term_assembly_s.empty()) {  // where the assembly went, per term
+  if (!r.terms.empty()) {  // where the assembly went, per term (and a term's own solves)
     text += "; terms";
-    for (const auto& [name, seconds] : r.term_assembly_s) {
-      std::snprintf(line, sizeof line, " %s %.1f", name.c_str(), 1e3 * seconds);
+    for (const SolveReport::TermTime& t : r.terms) {
+      std::snprintf(line, sizeof line, " %s %.1f", t.name.c_str(), 1e3 * t.assembly_s);
       text += line;
+      if (t.other_s >= 5e-5) {
+        std::snprintf(line, sizeof line, " (+%.1f own solves)", 1e3 * t.other_s);
+        text += line;
+      }
     }
   }
   return text;
@@ -169,6 +173,7 @@ SolveReport QuasiStaticSolver::solve(const NewtonSettings& s) {
   m.ensure_set_up();
   // A solve that continues from a converged one (a haptic frame, a time step) never waits for a
   // factorisation: stale ones are replaced in the background.
+  const bool background = m.system.tangent().background_under_way();
   const double waited = m.system.tangent().begin_frame(m.driver.loaded());
   if (m.inertia && m.inertia->dynamics().rayleigh_stiffness_s != 0 && !m.damping) {
     // beta K0: the elastic tangent's values at the reference state, constrained diagonals zero.
@@ -216,9 +221,12 @@ SolveReport QuasiStaticSolver::solve(const NewtonSettings& s) {
     };
   SolveReport report = m.driver.solve(s, predictor, handover_error);
   report.factorisation_s += waited;  // for a background factorisation taken up now
+  report.background = background || m.system.tangent().background_under_way();
   const std::vector<Term*>& terms = m.driver.terms();
-  for (std::size_t i = 0; i < terms.size() && i < m.driver.term_seconds.size(); ++i)
-    report.term_assembly_s.emplace_back(terms[i]->name(), m.driver.term_seconds[i]);
+  for (std::size_t i = 0; i < terms.size() && i < m.driver.term_times.size(); ++i) {
+    report.terms.push_back(m.driver.term_times[i]);
+    report.terms.back().name = terms[i]->name();
+  }
   return report;
 }
 

@@ -109,6 +109,8 @@ class TangentSystem {
   // CG iterations allowed on a stale factorisation while a new one is made in the background.
   int max_background_cg_iterations = 30;
   int background_factorisations() const { return background_factorisations_; }
+  // A factorisation requested for the background and not yet taken up (on the worker, or done there).
+  bool background_under_way() const { return frames_since_request_ >= 0; }
   int max_cg_iterations = 8;
   // When CG took more than this many iterations, the next solve refactors.
   int refactor_after_iterations = 5;

@@ -34,6 +34,7 @@ int run_study_accuracy(const AccuracyOptions& options);
 
 struct EffectsOptions : StudyOptions {
   double duration_s = 0;  // of the trajectory; 0: all of it (--quick: 1 s)
+  int repeat = 3;         // runs of each configuration: each frame's time is the fastest of its runs
 };
 int run_study_effects(const EffectsOptions& options);
 

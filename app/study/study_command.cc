@@ -86,14 +86,17 @@ void add_study_command(CLI::App& parent, int& exit_code) {
   CLI::App* effects = study->add_subcommand("effects", "What each effect of a scene costs a frame");
   effects->footer(
       "Replays the scene in lockstep as it is (twice, for the noise) and with each listed effect removed\n"
-      "in turn; reports each run's frame times and each term's assembly time per frame, and shows that\n"
-      "an effect the scene does not list has no term and runs no code. Writes OUT/table.csv,\n"
+      "in turn; reports each run's frame times and each term's own time per frame, compares each\n"
+      "removal's saving with its term's time over the frames of equal work, and shows that an effect\n"
+      "the scene does not list has no term and runs no code. Writes OUT/table.csv, OUT/frames.csv,\n"
       "OUT/report.md and OUT/effects.png (a bar chart).");
   effects->add_option("scene", e->scene, "Scene file (.yaml)")->required()->check(CLI::ExistingFile);
   add_common(effects, *e, "fetouch-study-effects");
   effects->add_option("--duration", e->duration_s, "Seconds of the trajectory to replay (0: all)")
       ->check(CLI::Range(0.0, 3600.0))->capture_default_str();
   effects->add_flag("--quick", e->quick, "The trajectory's first second");
+  effects->add_option("--repeat", e->repeat, "Runs of each configuration; each frame's time is its fastest")
+      ->check(CLI::Range(1, 20))->capture_default_str();
   effects->callback([e, &exit_code]() { exit_code = guarded(*e, [e]() { return run_study_effects(*e); }); });
 
   auto h = std::make_shared<HardCasesOptions>();

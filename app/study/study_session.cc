@@ -30,23 +30,30 @@ class MeasuredEnvironment final : public haptics::Environment {
     const fem::SolveReport& report = inner_.last_report();
     f.newton_iterations = report.total_iterations;
     f.linear_iterations = report.linear_iterations;
-    f.cuts = report.cuts;
+    f.cuts = report.cuts, f.factorisations = report.factorisations, f.background = report.background;
+    const fem::ComplianceTimes& compliance = inner_.solver().last_compliance_times();
+    f.compliance_s = compliance.assembly_s + compliance.factorisation_s + compliance.solves_s;
+    f.compliance_linear_iterations = compliance.linear_iterations, f.compliance_factorisations = compliance.factorisations;
+    f.compliance_refined = compliance.refined;
     f.converged = out.status.converged;
     for (int c = 0; c < contacts(); ++c) {
       const Eigen::Matrix3d w = out.compliance.block<3, 3>(3 * c, 3 * c);
       const Eigen::Vector3d n = out.frames[static_cast<std::size_t>(c)].normal;
       f.felt_n_per_m.push_back(n.dot(w.ldlt().solve(n)));
     }
-    run_.frames.push_back(std::move(f));
+    f.assembly_s = report.assembly_s, f.factorisation_s = report.factorisation_s, f.linear_solve_s = report.solve_s;
     if (!out.status.converged) ++run_.newton_failures;
     run_.assembly_s += report.assembly_s, run_.factorisation_s += report.factorisation_s;
     run_.linear_solve_s += report.solve_s;
-    for (const auto& [name, seconds] : report.term_assembly_s) {
-      auto it = std::find_if(run_.term_assembly_s.begin(), run_.term_assembly_s.end(),
-                             [&name = name](const auto& t) { return t.first == name; });
-      if (it == run_.term_assembly_s.end()) run_.term_assembly_s.emplace_back(name, seconds);
-      else it->second += seconds;
+    for (const fem::SolveReport::TermTime& t : report.terms) {
+      auto it = std::find_if(run_.terms.begin(), run_.terms.end(), [&t](const StudyTermTime& s) { return s.name == t.name; });
+      if (it == run_.terms.end()) it = run_.terms.insert(it, StudyTermTime{t.name});
+      it->assembly_s += t.assembly_s, it->other_s += t.other_s, it->linear_iterations += t.linear_iterations;
+      const auto at = static_cast<std::size_t>(it - run_.terms.begin());
+      if (f.terms.size() <= at) f.terms.resize(at + 1);
+      f.terms[at] = StudyTermTime{t.name, t.assembly_s, t.other_s, t.linear_iterations};
     }
+    run_.frames.push_back(std::move(f));
   }
 
  private:

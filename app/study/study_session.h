@@ -6,7 +6,6 @@
 #include <Eigen/Dense>
 
 #include <string>
-#include <utility>
 #include <vector>
 
 #include "config/scene.h"
@@ -14,11 +13,29 @@
 
 namespace fetouch::app {
 
+// A term's own time (fem::SolveReport::TermTime): its assembly, and its other own work (a cavity's
+// restorations and step completions, solves with the factorisation) with their linear iterations.
+struct StudyTermTime {
+  std::string name;
+  double assembly_s = 0, other_s = 0;
+  long linear_iterations = 0;
+  double own_s() const { return assembly_s + other_s; }
+};
+
 struct StudyFrame {
   double time_s = 0;            // when the frame's samples were taken
   double solve_s = 0;           // the environment's answer, measured around it
-  int newton_iterations = 0, linear_iterations = 0, cuts = 0;
+  int newton_iterations = 0, linear_iterations = 0, cuts = 0, factorisations = 0;
+  bool background = false;  // a background factorisation was under way (fem::SolveReport::background)
   bool converged = true;
+  // The solve's phases, s: every term's assembly (each term's own below), factorisation, linear solves.
+  double assembly_s = 0, factorisation_s = 0, linear_solve_s = 0;
+  std::vector<StudyTermTime> terms;  // in StudyRun::terms' order
+  // The condensed compliance handed over after the solve (fem::ComplianceTimes): its time, s, its
+  // linear iterations and factorisations, and whether its columns were solved again.
+  double compliance_s = 0;
+  int compliance_linear_iterations = 0, compliance_factorisations = 0;
+  bool compliance_refined = false;
   std::vector<double> felt_n_per_m;  // per probe: n' (W_pp)^-1 n, the stiffness felt along the normal
 };
 
@@ -29,8 +46,8 @@ struct StudyRun {
   double period_s = 1e-3;
   std::vector<std::vector<Eigen::Vector3d>> forces;  // per probe, per tick: the force sent
   std::vector<StudyFrame> frames;
-  // Summed over the frames: each term's assembly, and the phases of the solves.
-  std::vector<std::pair<std::string, double>> term_assembly_s;
+  // Summed over the frames: each term's own time, and the phases of the solves.
+  std::vector<StudyTermTime> terms;
   double assembly_s = 0, factorisation_s = 0, linear_solve_s = 0;
   long newton_failures = 0;
   double wall_s = 0;  // the whole run, the tissue's set-up included

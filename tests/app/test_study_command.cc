@@ -128,6 +128,47 @@ TEST(StudyEffects, EachEffectRemovedInTurnAndUnlistedGravityRunsNoCode) {
   EXPECT_EQ(t.number(run.at("without inertia (and damping)"), "assembly_ms_damping"), 0);
   EXPECT_EQ(t.number(run.at("without damping"), "assembly_ms_damping"), 0);
   EXPECT_GT(fs::file_size(out / "effects.png"), 8000u);
+
+  // Each removal at equal work, recomputed from the per-frame table: the frames in which the run
+  // without the effect did the work the scene as is did, but the removed terms' own.
+  EXPECT_EQ(t.text(run.at("without gravity"), "removed_terms"), "loads");
+  EXPECT_EQ(t.text(run.at("without inertia (and damping)"), "removed_terms"), "inertia damping");
+  EXPECT_EQ(t.text(run.at("without damping"), "removed_terms"), "damping");
+  const Table f = read_table(out / "frames.csv");
+  std::map<std::string, std::vector<std::size_t>> frames;  // run -> its rows, in frame order
+  for (std::size_t i = 0; i < f.rows.size(); ++i) frames[f.text(i, "run")].push_back(i);
+  const auto zero = [&f](std::size_t i, const char* column) { return f.number(i, column) == 0; };
+  for (const auto& [name, terms] : std::map<std::string, std::vector<std::string>>{
+           {"without gravity", {"loads"}}, {"without inertia (and damping)", {"inertia", "damping"}}, {"without damping", {"damping"}}}) {
+    const std::vector<std::size_t>&a = frames.at("as is"), &b = frames.at(name);
+    ASSERT_EQ(a.size(), b.size());
+    int matched = 0;
+    double saved = 0, own = 0;
+    for (std::size_t k = 0; k < a.size(); ++k) {
+      const std::size_t i = a[k], j = b[k];
+      double own_ms = 0, own_linear = 0;
+      for (const std::string& term : terms) own_ms += f.number(i, "own_ms_" + term), own_linear += f.number(i, "own_linear_" + term);
+      const bool same = f.number(i, "converged") == 1 && f.number(j, "converged") == 1 &&
+                        f.number(i, "newton") == f.number(j, "newton") && f.number(i, "cuts") == f.number(j, "cuts") &&
+                        f.number(i, "linear") - own_linear == f.number(j, "linear") && zero(i, "factorisations") &&
+                        zero(j, "factorisations") && zero(i, "factorisation_ms") && zero(j, "factorisation_ms") &&
+                        zero(i, "background") && zero(j, "background") &&
+                        f.number(i, "compliance_linear") == f.number(j, "compliance_linear") &&
+                        zero(i, "compliance_factorisations") && zero(j, "compliance_factorisations") &&
+                        f.number(i, "compliance_refined") == f.number(j, "compliance_refined");
+      if (!same) continue;
+      ++matched;
+      saved += f.number(i, "solve_ms") - f.number(j, "solve_ms");
+      own += own_ms;
+    }
+    const std::size_t row = run.at(name);
+    EXPECT_GT(matched, 3) << name;
+    EXPECT_EQ(matched, t.number(row, "equal_work_frames")) << name;
+    EXPECT_NEAR(saved / matched, t.number(row, "equal_work_saved_ms"), 1e-9) << name;
+    EXPECT_NEAR(own / matched, t.number(row, "equal_work_own_ms"), 1e-9) << name;
+    EXPECT_EQ(t.text(row, "equal_work_holds"),
+              std::abs(saved - own) / matched <= t.number(row, "equal_work_tolerance_ms") ? "1" : "0") << name;
+  }
   fs::remove_all(out);
 }
 

@@ -146,6 +146,37 @@ TEST(Cavity, PressingOneSideRaisesThePressureAndBulgesTheFarSide) {
   EXPECT_LT(std::abs(wet.near_side_uz), std::abs(dry.near_side_uz)) << "the incompressible fill stiffens the sphere";
 }
 
+// The cavity's own work beyond its assembly (restoring its volume law after a frame's prediction,
+// completing each Newton step for its pressure: solves with the factorisation) is timed against it
+// in the solve's profile, with the linear iterations it took; elasticity has none of its own.
+TEST(Cavity, ItsOwnSolvesAreProfiledAsItsOwn) {
+  dealii::Triangulation<3> tria;
+  const NeoHookean material(lame_lambda(5000, 0.45), lame_mu(5000, 0.45));
+  QuasiStaticSolver solver = held_sphere(tria, material, true);
+  const int probe = solver.add_contact_patch(Point<3>(0, 0, kOuter), 0.015);
+  Tensor<1, 3> force;
+  force[2] = -0.5;
+  solver.set_patch_force(probe, force);
+  NewtonSettings settings;
+  ASSERT_TRUE(solver.solve(settings).converged);
+  solver.compliance();  // a haptic frame follows: it starts from the compliance's prediction
+  force[2] = -0.6;
+  solver.set_patch_force(probe, force);
+  const SolveReport frame = solver.solve(settings);
+  ASSERT_TRUE(frame.converged);
+  int own_iterations = 0;
+  for (const SolveReport::TermTime& t : frame.terms) {
+    own_iterations += t.linear_iterations;
+    if (t.name == std::string("cavity")) {
+      EXPECT_GT(t.linear_iterations, 0);
+      EXPECT_GT(t.other_s, 0.0);
+    } else {
+      EXPECT_EQ(t.linear_iterations, 0) << t.name;
+    }
+  }
+  EXPECT_LE(own_iterations, frame.linear_iterations);
+}
+
 // Two probes on opposite poles of the water-filled sphere: the compliance W (with the water's
 // rank-one stiffness) matches finite differences of the nonlinear solve, and the water couples the
 // poles far more than the empty sphere does: pressing the top pushes the bottom out.

@@ -209,7 +209,7 @@ TEST(SolverTerms, AnEffectTheSceneDoesNotListIsNeverBuilt) {
     const SolveReport r = m->solver->solve(m->newton);
     EXPECT_TRUE(r.converged);
     std::vector<std::string> profiled;
-    for (const auto& [name, seconds] : r.term_assembly_s) profiled.push_back(name);
+    for (const fem::SolveReport::TermTime& t : r.terms) profiled.push_back(t.name);
     EXPECT_EQ(profiled, m->solver->terms());
     return m->solver->terms();
   };
