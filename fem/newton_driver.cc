@@ -183,7 +183,7 @@ StepReport NewtonDriver::newton(double lambda, const NewtonSettings& s, double r
     // unless it overshoots the energy's minimum along du so that g(1) < -g(0) / 2; then a takes the
     // secant's root. The residual's norm is no merit function here: a good step from rest often
     // raises it tenfold, and halving until it falls costs a dozen iterations a load step. Otherwise
-    // (a cavity's constraint) it halves until the residual's norm decreases. Any step is halved
+    // (a term without an energy) it halves until the residual's norm decreases. Any step is halved
     // while it inverts an element. The full step is assembled with its tangent, which the next
     // iteration then reuses (one assembly per Newton iteration when the full step is taken).
     // Without the line search the full step is taken whatever its residual.
