@@ -15,14 +15,19 @@ haptics::Trajectory probe_trajectory(const config::Probe& probe, int index, cons
   return read_probe_trajectory(file, probe.name, index);
 }
 
+std::unique_ptr<fem::TissueModel> build_session_tissue(const config::Scene& scene) {
+  log::info() << "building the tissue model of " << scene.name;
+  std::unique_ptr<fem::TissueModel> model = fem::build_tissue_model(scene);
+  // Inertia (and damping): each frame's solve is one time step of the solver's period.
+  if (const auto dynamics = fem::scene_dynamics(scene, model.get())) model->solver->enable_dynamics(*dynamics);
+  return model;
+}
+
 SceneRig build_scene_rig(const config::Scene& scene, const haptics::HapticLoopSettings& settings,
                          const std::filesystem::path& first_trajectory) {
-  log::info() << "building the tissue model of " << scene.name;
   SceneRig rig;
-  rig.model = fem::build_tissue_model(scene);
+  rig.model = build_session_tissue(scene);
   fem::TissueModel* model = rig.model.get();
-  // Inertia (and damping): each frame's solve is one time step of the solver's period.
-  if (const auto dynamics = fem::scene_dynamics(scene, model)) model->solver->enable_dynamics(*dynamics);
   for (int p = 0; p < static_cast<int>(scene.probes.size()); ++p) {
     const config::Probe& probe = scene.probes[p];
     const haptics::Trajectory path = probe_trajectory(probe, p, first_trajectory);

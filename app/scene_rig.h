@@ -30,8 +30,12 @@ struct SceneRig {
 // Throws std::runtime_error naming the probe when it has none.
 haptics::Trajectory probe_trajectory(const config::Probe& probe, int index, const std::filesystem::path& first = {});
 
-// Builds the tissue model of `scene` (its mesh must be ready: mesh_scene_volume), in time steps of
-// the solver's period when the scene lists inertia, and the devices.
+// The tissue model of `scene` for a session (its mesh must be ready: mesh_scene_volume): each
+// frame's solve one time step of the solver's period when the scene lists inertia. What `fetouch
+// replay`, `run`, the trainer and the studies build. Throws std::runtime_error naming what is wrong.
+std::unique_ptr<fem::TissueModel> build_session_tissue(const config::Scene& scene);
+
+// Builds the session's tissue (build_session_tissue) and the devices.
 // Throws std::runtime_error naming what is wrong.
 SceneRig build_scene_rig(const config::Scene& scene, const haptics::HapticLoopSettings& settings,
                          const std::filesystem::path& first_trajectory = {});

@@ -28,6 +28,7 @@
 #include "app/scene_mesh.h"
 #include "app/session.h"
 #include "fem/fem_environment.h"
+#include "app/scene_rig.h"
 #include "fem/tissue_model.h"
 #include "haptics/phantom.h"
 
@@ -123,9 +124,7 @@ int run_run(const RunOptions& o) {
       else
         starts.emplace_back(probe.device.offset_m[0], probe.device.offset_m[1], probe.device.offset_m[2]);
     }
-    log::info() << "building the tissue model of " << scene.name;
-    std::unique_ptr<fem::TissueModel> model = fem::build_tissue_model(scene);
-    if (const auto dynamics = fem::scene_dynamics(scene, model.get())) model->solver->enable_dynamics(*dynamics);
+    std::unique_ptr<fem::TissueModel> model = build_session_tissue(scene);
     SessionSettings session;
     session.loop = settings;
     for (int p = 0; p < static_cast<int>(scene.probes.size()); ++p) {

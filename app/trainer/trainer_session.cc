@@ -10,6 +10,7 @@
 #include "app/scene_devices.h"
 #include "app/scene_mesh.h"
 #include "fem/fem_environment.h"
+#include "app/scene_rig.h"
 #include "fem/tissue_model.h"
 #include "haptics/phantom.h"
 
@@ -49,11 +50,8 @@ TrainerSession::TrainerSession(const config::Scene& scene, const TrainerOptions&
   scene_.mesh = mesh_scene_volume(scene_.mesh);
   settings_.loop = loop_settings(scene_);
   settings_.loop.modes = &modes_;
-  log::info() << "building the tissue model of " << scene_.name;
-  model_ = fem::build_tissue_model(scene_);
+  model_ = build_session_tissue(scene_);
   fem::TissueModel* model = model_.get();
-  // Inertia (and damping): each frame's solve is one time step of the solver's period.
-  if (const auto dynamics = fem::scene_dynamics(scene_, model)) model->solver->enable_dynamics(*dynamics);
   fem::QuasiStaticSolver& solver = *model->solver;
   {
     fem::QuasiStaticSolver::DrawingMesh d = solver.drawing_mesh();
