@@ -3,8 +3,12 @@
 #include <CLI/CLI.hpp>
 #include <vtkLogger.h>
 
+#include <unistd.h>
+
 #include <algorithm>
 #include <cerrno>
+#include <cstring>
+#include <filesystem>
 #include <cmath>
 #include <cstdlib>
 #include <exception>
@@ -44,9 +48,27 @@ int first_non_finite(int argc, char** argv) {
   return 0;
 }
 
+// `fetouch COMMAND ...` for a command that draws: the same arguments to fetouch-gui beside this
+// executable. Returns only when it cannot be executed.
+int run_drawing_command(const char* command, char** argv) {
+  std::error_code error;
+  const std::filesystem::path self = std::filesystem::read_symlink("/proc/self/exe", error);
+  const std::filesystem::path gui = (error ? std::filesystem::path(argv[0]).parent_path() : self.parent_path()) / "fetouch-gui";
+  execv(gui.c_str(), argv);
+  std::cerr << "error: `fetouch " << command << "` draws with Qt and VTK, which live in " << gui.string()
+            << " beside fetouch, and that could not be run: " << std::strerror(errno) << "\n";
+  return kExitFailure;
+}
+
 }  // namespace
 
-int run_cli(int argc, char** argv) {
+const char* drawing_command_description(const char* name) {
+  for (const DrawingCommand& c : kDrawingCommands)
+    if (std::strcmp(c.name, name) == 0) return c.description;
+  return "";
+}
+
+int run_cli(int argc, char** argv, AddDrawingCommand add_drawing_command) {
   CLI::App app{
       "Fetouch: touch soft tissue reconstructed from 3D ultrasound through haptic devices, with a\n"
       "nonlinear finite-element model behind the touch.\n"
@@ -64,19 +86,24 @@ int run_cli(int argc, char** argv) {
   app.footer("Documentation: README.md and docs/ in the source tree.");
 
   int exit_code = kExitOk;
+  // A command that draws: itself in fetouch-gui; in fetouch listed, and run by fetouch-gui (below).
+  const auto drawing = [&](const char* name) {
+    if (add_drawing_command) add_drawing_command(name, app, exit_code);
+    else app.add_subcommand(name, drawing_command_description(name))->allow_extras();
+  };
   add_check_command(app, exit_code);
-  add_stability_command(app, exit_code);
+  drawing("stability");
   add_solve_command(app, exit_code);
   add_phantom_command(app, exit_code);
   add_reconstruct_command(app, exit_code);
   add_mesh_command(app, exit_code);
-  add_render_command(app, exit_code);
+  drawing("render");
   add_replay_command(app, exit_code);
   add_run_command(app, exit_code);
   add_devices_command(app, exit_code);
-  add_trainer_command(app, exit_code);
+  drawing("trainer");
   add_trajectory_command(app, exit_code);
-  add_study_command(app, exit_code);
+  drawing("study");
 
   app.parse_complete_callback([&]() {
     if (quiet) log::set_level(log::Level::error);
@@ -102,6 +129,9 @@ int run_cli(int argc, char** argv) {
                 << ".\nRun `fetouch --help` for what each does.\n";
       return kExitBadInput;
     }
+    if (!add_drawing_command)
+      for (const DrawingCommand& c : kDrawingCommands)
+        if (std::strcmp(c.name, *word) == 0) return run_drawing_command(c.name, argv);
   }
   if (const int bad = first_non_finite(argc, argv)) {
     std::string option = "argument " + std::to_string(bad);

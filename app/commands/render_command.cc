@@ -33,6 +33,7 @@
 #include <sstream>
 
 #include "app/chart_png.h"
+#include "app/cli.h"
 #include "app/commands/commands.h"
 #include "app/exit_codes.h"
 #include "meshes/mesh_file_checks.h"
@@ -211,7 +212,7 @@ int run_render(const RenderOptions& o) {
 
 void add_render_command(CLI::App& parent, int& exit_code) {
   auto o = std::make_shared<RenderOptions>();
-  CLI::App* cmd = parent.add_subcommand("render", "Draw a mesh or a volume's middle slice to a PNG");
+  CLI::App* cmd = parent.add_subcommand("render", drawing_command_description("render"));
   cmd->footer(
       "A .vtu mesh is drawn as the outer surface of its elements with their edges; a volume (.mha,\n"
       ".mhd, .vti, .nrrd, a DICOM folder) as its middle slice across y, in grey levels (or colours per\n"

@@ -13,6 +13,7 @@
 #include <sstream>
 
 #include "app/chart_png.h"
+#include "app/cli.h"
 #include "app/commands/commands.h"
 #include "app/exit_codes.h"
 #include "app/json_writer.h"
@@ -368,7 +369,7 @@ int run_stability(const StabilityOptions& o) {
 
 void add_stability_command(CLI::App& parent, int& exit_code) {
   auto o = std::make_shared<StabilityOptions>();
-  CLI::App* cmd = parent.add_subcommand("stability", "Analyse the stability of a local model on a tissue");
+  CLI::App* cmd = parent.add_subcommand("stability", drawing_command_description("stability"));
   cmd->footer(
       "One contact, normalised units as in the seed: K0 the tissue's stiffness, B0 its damping in the\n"
       "frame-rate law (K0 + B0(1 - z^-1)) x_o = F, Kh and N*I the local model's gains. Prints the\n"

@@ -6,6 +6,7 @@
 #include <memory>
 #include <stdexcept>
 
+#include "app/cli.h"
 #include "app/commands/commands.h"
 #include "app/error_text.h"
 #include "app/exit_codes.h"
@@ -49,7 +50,7 @@ int guarded(const StudyOptions& o, const std::function<int()>& work) {
 }  // namespace
 
 void add_study_command(CLI::App& parent, int& exit_code) {
-  CLI::App* study = parent.add_subcommand("study", "Studies of a scene: accuracy against time, effects' costs, hard cases");
+  CLI::App* study = parent.add_subcommand("study", drawing_command_description("study"));
   study->require_subcommand(1);
   study->footer("Each study writes a table (CSV), a report (Markdown) and plots (PNG, drawn with VTK: run under\n"
                 "`xvfb-run -a` without a display). docs/study.md tells what each measures.");

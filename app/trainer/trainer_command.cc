@@ -9,6 +9,7 @@
 #include <iostream>
 #include <memory>
 
+#include "app/cli.h"
 #include "app/commands/commands.h"
 #include "app/exit_codes.h"
 #include "app/json_writer.h"
@@ -147,7 +148,7 @@ int run_trainer(const TrainerCommandOptions& o) {
 
 void add_trainer_command(CLI::App& parent, int& exit_code) {
   auto o = std::make_shared<TrainerCommandOptions>();
-  CLI::App* cmd = parent.add_subcommand("trainer", "The trainer window: touch the tissue, see it deform and its ultrasound");
+  CLI::App* cmd = parent.add_subcommand("trainer", drawing_command_description("trainer"));
   cmd->footer(
       "Runs the scene's real-time session in a window: the deformed tissue (3D), the ultrasound image\n"
       "in the first probe's plane through the deformed tissue, force and frame-time plots, and a status\n"

@@ -44,6 +44,24 @@ TEST(Cli, HelpForTheProgramAndEachCommand) {
   EXPECT_GE(commands, 1);
 }
 
+// `fetouch` itself loads neither Qt nor VTK's rendering (a third of the libraries, 50 ms of every
+// start); the commands that draw run in fetouch-gui beside it, with the same arguments and exit code.
+TEST(Cli, TheCommandsThatDrawRunInFetouchGuiAndTheRestLoadNoGui) {
+  const auto libraries = run_command("LD_DEBUG=libs " + fetouch("--version"));
+  EXPECT_EQ(libraries.exit_code, 0);
+  EXPECT_NE(libraries.err.find("libdeal.ii"), std::string::npos) << "LD_DEBUG shows no library loaded";
+  EXPECT_EQ(libraries.err.find("libQt5"), std::string::npos);
+  EXPECT_EQ(libraries.err.find("libvtkRenderingOpenGL2"), std::string::npos);
+  const auto render = run_command("LD_DEBUG=libs " + fetouch("render --help"));
+  EXPECT_EQ(render.exit_code, 0);
+  EXPECT_NE(render.out.find("Usage: fetouch render"), std::string::npos) << render.out;
+  EXPECT_NE(render.err.find("libvtkRenderingOpenGL2"), std::string::npos) << "render did not run in fetouch-gui";
+  const auto bad = run_command(fetouch("study effects " + std::string(FETOUCH_SOURCE_DIR) +
+                                       "/config/scenes/block_press.yaml --no-such-option"));
+  EXPECT_EQ(bad.exit_code, 2) << bad.err;
+  EXPECT_NE(bad.err.find("--no-such-option"), std::string::npos) << bad.err;
+}
+
 TEST(Cli, BadUsageExitsTwoWithAHint) {
   for (const char* arguments : {"", "frobnicate", "check", "check --no-such-option x.yaml"}) {
     const auto r = run_command(fetouch(arguments));
