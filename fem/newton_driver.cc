@@ -105,7 +105,6 @@ void NewtonDriver::restore(std::size_t i) {
 
 template <class Work>
 void NewtonDriver::own(std::size_t i, const Work& work) {
-  term_times.resize(terms_.size());
   const auto start = std::chrono::steady_clock::now();
   const int iterations = system_.times.linear_iterations;
   work();

@@ -15,6 +15,7 @@
 #include <iostream>
 #include <numeric>
 #include <sstream>
+#include <tuple>
 
 #include "app/chart_png.h"
 #include "app/json_writer.h"
@@ -79,15 +80,20 @@ struct EqualWork {
   double frame_ms = 0;  // the scene as is, over those frames
 };
 
-// Two frames did the same work, but `a_own_linear` linear iterations of a's own terms: the same
-// Newton and linear iterations, cuts and compliance work, no factorisation, and none under way in
-// the background (the worker shares the machine's cores and memory).
+// The work a frame did: Newton and linear iterations (less `own_linear`, a removed term's own),
+// cuts, factorisations (taken, waited for, under way in the background) and the compliance's work.
+auto work(const StudyFrame& f, long own_linear = 0) {
+  return std::make_tuple(f.converged, f.background, f.newton_iterations, f.cuts, f.linear_iterations - own_linear,
+                         f.factorisations, f.factorisation_s == 0, f.compliance_linear_iterations,
+                         f.compliance_factorisations, f.compliance_refined);
+}
+
+// Two frames did the same work, but `a_own_linear` linear iterations of a's own terms, and a quiet
+// one: converged, no factorisation, none under way in the background (the worker shares the
+// machine's cores and memory).
 bool same_work(const StudyFrame& a, const StudyFrame& b, long a_own_linear = 0) {
-  return a.converged && b.converged && !a.background && !b.background && a.newton_iterations == b.newton_iterations &&
-         a.cuts == b.cuts &&
-         a.linear_iterations - a_own_linear == b.linear_iterations && a.factorisations == 0 && b.factorisations == 0 &&
-         a.factorisation_s == 0 && b.factorisation_s == 0 && a.compliance_linear_iterations == b.compliance_linear_iterations &&
-         a.compliance_factorisations == 0 && b.compliance_factorisations == 0 && a.compliance_refined == b.compliance_refined;
+  return work(a, a_own_linear) == work(b) && a.converged && !a.background && a.factorisations == 0 &&
+         a.factorisation_s == 0 && a.compliance_factorisations == 0;
 }
 
 // `run` and `again` are runs of the same configuration: each frame of `run` takes the time (and
@@ -96,14 +102,7 @@ void keep_fastest(StudyRun& run, const StudyRun& again) {
   for (std::size_t i = 0; i < std::min(run.frames.size(), again.frames.size()); ++i) {
     StudyFrame& f = run.frames[i];
     const StudyFrame& g = again.frames[i];
-    const bool identical = f.converged == g.converged && f.background == g.background &&
-                           f.newton_iterations == g.newton_iterations && f.cuts == g.cuts &&
-                           f.linear_iterations == g.linear_iterations && f.factorisations == g.factorisations &&
-                           (f.factorisation_s == 0) == (g.factorisation_s == 0) &&
-                           f.compliance_linear_iterations == g.compliance_linear_iterations &&
-                           f.compliance_factorisations == g.compliance_factorisations &&
-                           f.compliance_refined == g.compliance_refined;
-    if (!identical) continue;
+    if (work(f) != work(g)) continue;
     f.solve_s = std::min(f.solve_s, g.solve_s);
     for (StudyTermTime& t : f.terms)
       if (const StudyTermTime* u = find_term(g.terms, t.name))
