@@ -26,9 +26,9 @@
 #include "app/recording.h"
 #include "app/scene_devices.h"
 #include "app/scene_mesh.h"
+#include "app/scene_rig.h"
 #include "app/session.h"
 #include "fem/fem_environment.h"
-#include "app/scene_rig.h"
 #include "fem/tissue_model.h"
 #include "haptics/phantom.h"
 
