@@ -25,9 +25,9 @@ namespace fs = std::filesystem;
 namespace {
 
 // The mesher's revision: raised whenever the same volume and options give a different mesh (2: the
-// boundary moved out to the segmented volume, regions by their labels' cover), so that a mesh cached
-// by an older Fetouch is made again.
-constexpr int kMesherRevision = 2;
+// boundary moved out to the segmented volume, regions by their labels' cover; 3: CGAL's restricted
+// Delaunay surface filled by HXT first), so that a mesh cached by an older Fetouch is made again.
+constexpr int kMesherRevision = 3;
 
 // What decides the mesh: the mesher's revision, the volume (path, size, modification time) and
 // every meshing option.
@@ -50,7 +50,8 @@ std::string cache_key(const config::MeshSpec& spec) {
       key << entry.path().filename().string() << ':' << entry.last_write_time(ec).time_since_epoch().count() << ',';
   }
   key << '|' << m.target_size_m << '|' << m.fetus << '|' << (m.threshold ? *m.threshold : -1.0) << '|'
-      << static_cast<int>(m.smoothing) << '|' << m.smoothing_sigma_m << '|' << m.closing_voxels << '|';
+      << static_cast<int>(m.smoothing) << '|' << m.smoothing_sigma_m << '|' << m.closing_voxels << '|'
+      << static_cast<int>(m.surface) << '|';
   for (int l : m.labels) key << l << ',';
   for (const auto& [name, labels] : m.regions) {
     key << '|' << name << '=';
@@ -93,6 +94,7 @@ void mesh_into(const config::MeshSpec& spec, const fs::path& file) {
   const meshes::MaskVolume input = mask_volume(mask);
   meshes::MeshingSettings settings;
   settings.element_size_mm = m.target_size_m * 1e3;
+  settings.restricted_surface = m.surface == config::MeshSurface::restricted;
   if (m.refine_center_m) {
     for (int d = 0; d < 3; ++d) settings.refine_center_mm[d] = (*m.refine_center_m)[d] * 1e3;
     settings.refine_radius_mm = m.refine_radius_m * 1e3, settings.refine_size_mm = m.refine_size_m * 1e3;

@@ -28,6 +28,10 @@ enum class MeshSource { file, volume, phantom, generated };
 enum class ElementType { p1, p2, q1, q2 };  // P: tetrahedra (simplex), Q: hexahedra
 enum class GeneratedShape { box, ball, shell };
 enum class SmoothingFilter { none, gaussian, median };
+// How the segmentation's surface is made before it is filled (docs/meshing.md): CGAL's restricted
+// Delaunay surface, or the surface contoured by VTK and remeshed by Gmsh (the mesher before
+// revision 3; the anatomy scenes keep it: their figures were measured on it).
+enum class MeshSurface { restricted, contoured };
 
 // Options for turning an ultrasound volume into a mesh (imaging + meshes pipeline, the same as
 // `fetouch mesh`): one of three segmentations (labels of a label map, the fetal pipeline, or
@@ -42,6 +46,7 @@ struct MeshingOptions {
   SmoothingFilter smoothing = SmoothingFilter::gaussian;
   double smoothing_sigma_m = 1e-3;  // gaussian only
   int closing_voxels = 2;
+  MeshSurface surface = MeshSurface::restricted;
   // Finer elements near a point (absent: none).
   std::optional<Vec3> refine_center_m;
   double refine_radius_m = 0, refine_size_m = 0;

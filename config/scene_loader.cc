@@ -53,6 +53,7 @@ const Choices<ElementType> kElements{
 const Choices<GeneratedShape> kShapes{{"box", GeneratedShape::box},
                                       {"ball", GeneratedShape::ball},
                                       {"shell", GeneratedShape::shell}};
+const Choices<MeshSurface> kSurfaces{{"restricted", MeshSurface::restricted}, {"contoured", MeshSurface::contoured}};
 const Choices<SmoothingFilter> kFilters{{"none", SmoothingFilter::none},
                                         {"gaussian", SmoothingFilter::gaussian},
                                         {"median", SmoothingFilter::median}};
@@ -105,7 +106,7 @@ void read_meshing(MapView& parent, MeshingOptions& out) {
   const Entry e = parent.entry("meshing");
   MapView map(parent.reader(), e.value, e.path, e.key_mark,
               {"target_size_m", "labels", "regions", "fetus", "threshold", "smoothing", "smoothing_sigma_m",
-               "closing_voxels", "refine"});
+               "closing_voxels", "refine", "surface"});
   if (!map.valid()) return;
   map.number("target_size_m", out.target_size_m, plausible::element_size_m);
   if (map.has("threshold")) {
@@ -165,6 +166,7 @@ void read_meshing(MapView& parent, MeshingOptions& out) {
   map.choice("smoothing", out.smoothing, kFilters);
   map.number("smoothing_sigma_m", out.smoothing_sigma_m, plausible::smoothing_sigma_m);
   map.integer("closing_voxels", out.closing_voxels, {0, 10});
+  map.choice("surface", out.surface, kSurfaces);
   if (map.has("refine")) {
     const Entry r = map.entry("refine");
     MapView refine(map.reader(), r.value, r.path, r.key_mark, {"center_m", "radius_m", "size_m"});

@@ -13,7 +13,8 @@ namespace fetouch::meshes {
 
 enum class FillPath {
   remeshed_hxt,     // the surface split into patches Gmsh parametrises and remeshes at the size; HXT
-  surface_hxt       // the surface's own triangles kept; HXT
+  surface_hxt,      // the surface's own triangles kept; HXT
+  restricted_hxt    // a restricted Delaunay surface (meshes/restricted_surface.h), kept; HXT
 };
 const char* describe(FillPath path);
 

@@ -16,14 +16,7 @@ Point3 cross(const Point3& a, const Point3& b) {
 double dot(const Point3& a, const Point3& b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
 double norm(const Point3& a) { return std::sqrt(dot(a, a)); }
 
-// The face opposite vertex f, ordered so that its normal (1 - 0) x (2 - 0) points out of a
-// positively oriented element.
-constexpr int kFace[4][3] = {{1, 2, 3}, {0, 3, 2}, {0, 1, 3}, {0, 2, 1}};
-
-Triangle sorted(Triangle f) {
-  std::sort(f.begin(), f.end());
-  return f;
-}
+constexpr auto& kFace = kTetFace;
 
 // A mesh being repaired: the elements (dead ones marked), and for each node the live elements
 // that use it. Every adjacency question (is this face, edge or node on the boundary; which
@@ -284,24 +277,20 @@ std::array<double, 6> dihedral_angles_deg(const Point3& a, const Point3& b, cons
 }
 
 double min_dihedral_deg(const std::vector<Point3>& nodes, const Tet& t) {
-  const Point3 &a = nodes[t[0]], &b = nodes[t[1]], &c = nodes[t[2]], &d = nodes[t[3]];
-  if (!(tet_signed_volume(a, b, c, d) > 0)) return 0;
-  const auto angles = dihedral_angles_deg(a, b, c, d);
-  return *std::min_element(angles.begin(), angles.end());
-}
-
-std::vector<Triangle> boundary_faces(const std::vector<Tet>& tets) {
-  std::map<Triangle, std::pair<int, Triangle>> faces;  // sorted -> (count, oriented)
-  for (const Tet& t : tets)
-    for (const auto& f : kFace) {
-      const Triangle oriented{t[f[0]], t[f[1]], t[f[2]]};
-      auto& entry = faces[sorted(oriented)];
-      ++entry.first, entry.second = oriented;
-    }
-  std::vector<Triangle> out;
-  for (const auto& [key, entry] : faces)
-    if (entry.first == 1) out.push_back(entry.second);
-  return out;
+  const Point3 p[4] = {nodes[t[0]], nodes[t[1]], nodes[t[2]], nodes[t[3]]};
+  if (!(tet_signed_volume(p[0], p[1], p[2], p[3]) > 0)) return 0;
+  // The smallest angle is at the pair of faces whose outward normals are least opposed: pi minus
+  // the angle between them, one arc cosine for the element.
+  Point3 n[4];
+  for (int f = 0; f < 4; ++f) {
+    n[f] = cross(sub(p[kFace[f][1]], p[kFace[f][0]]), sub(p[kFace[f][2]], p[kFace[f][0]]));
+    const double length = norm(n[f]);
+    for (double& x : n[f]) x /= length;
+  }
+  double least = 1;
+  for (int f = 0; f < 4; ++f)
+    for (int g = f + 1; g < 4; ++g) least = std::min(least, dot(n[f], n[g]));
+  return 180 - std::acos(std::clamp(least, -1.0, 1.0)) * 180 / M_PI;
 }
 
 double restore_volume(std::vector<Point3>& nodes, const std::vector<Tet>& tets, double target_volume, double max_offset,
@@ -313,24 +302,28 @@ double restore_volume(std::vector<Point3>& nodes, const std::vector<Tet>& tets, 
   };
   // Each boundary node's normal: the sum of its outward faces' area vectors, made unit. Moving
   // every boundary node by d along it changes the volume by about d times the boundary's area.
-  std::map<int, Point3> normal;
+  std::vector<Point3> normal(nodes.size(), Point3{0, 0, 0});
+  std::vector<char> moving(nodes.size(), 0);
   double area = 0;
   for (const Triangle& f : boundary_faces(tets)) {
     const Point3 &a = nodes[f[0]], &b = nodes[f[1]], &c = nodes[f[2]];
     const Point3 n = cross(sub(b, a), sub(c, a));  // twice the area vector
     area += 0.5 * norm(n);
-    for (const int v : f)
+    for (const int v : f) {
+      moving[v] = 1;
       for (int k = 0; k < 3; ++k) normal[v][k] += n[k];
+    }
   }
   if (area <= 0 || !(target_volume > 0)) return 0;
-  for (auto& [v, n] : normal) {
-    const double length = norm(n);
-    for (int k = 0; k < 3; ++k) n[k] = length > 0 ? n[k] / length : 0;
+  for (std::size_t v = 0; v < nodes.size(); ++v) {
+    const double length = norm(normal[v]);
+    for (int k = 0; k < 3; ++k) normal[v][k] = length > 0 ? normal[v][k] / length : 0;
   }
   std::vector<Point3> moved = nodes;
   const auto move_by = [&](double d) {
-    for (const auto& [v, n] : normal)
-      for (int k = 0; k < 3; ++k) moved[v][k] = nodes[v][k] + d * n[k];
+    for (std::size_t v = 0; v < nodes.size(); ++v)
+      if (moving[v])
+        for (int k = 0; k < 3; ++k) moved[v][k] = nodes[v][k] + d * normal[v][k];
     return volume_of(moved);
   };
   // Secant steps on the offset, the first with the boundary's area as the slope.
@@ -345,47 +338,12 @@ double restore_volume(std::vector<Point3>& nodes, const std::vector<Tet>& tets, 
   }
   move_by(offset);
   for (const Tet& t : tets) {
+    if (!moving[t[0]] && !moving[t[1]] && !moving[t[2]] && !moving[t[3]]) continue;  // unchanged
     const double before = min_dihedral_deg(nodes, t), after = min_dihedral_deg(moved, t);
     if (after <= 0 || (after < floor_deg && after < before)) return 0;
   }
   nodes = std::move(moved);
   return offset;
-}
-
-bool boundary_is_closed_manifold(const std::vector<Tet>& tets) {
-  std::map<Triangle, int> faces;
-  for (const Tet& t : tets)
-    for (const auto& f : kFace)
-      if (++faces[sorted({t[f[0]], t[f[1]], t[f[2]]})] > 2) return false;
-  // Each boundary node's link: the edges opposite it in its boundary faces. Closed and manifold
-  // when every boundary edge has two faces and every link is one cycle.
-  std::map<std::pair<int, int>, int> edges;
-  std::map<int, std::vector<std::pair<int, int>>> links;
-  for (const auto& [f, count] : faces) {
-    if (count != 1) continue;
-    for (int k = 0; k < 3; ++k) {
-      const int a = f[k], b = f[(k + 1) % 3], c = f[(k + 2) % 3];
-      ++edges[{std::min(a, b), std::max(a, b)}];
-      links[a].push_back({b, c});
-    }
-  }
-  for (const auto& [e, count] : edges)
-    if (count != 2) return false;
-  for (auto& [v, link] : links) {
-    // Walk the cycle from the first edge; it must visit every edge of the link.
-    std::size_t visited = 1;
-    int previous = link[0].first, current = link[0].second;
-    while (current != link[0].first && visited <= link.size()) {
-      int next = -1;
-      for (const auto& [x, y] : link)
-        if (x == current && y != previous) next = y;
-        else if (y == current && x != previous) next = x;
-      if (next < 0) return false;
-      previous = current, current = next, ++visited;
-    }
-    if (visited != link.size()) return false;
-  }
-  return true;
 }
 
 QualityReport mesh_quality(const std::vector<Point3>& nodes, const std::vector<Tet>& tets) {
@@ -424,13 +382,18 @@ QualityReport mesh_quality(const std::vector<Point3>& nodes, const std::vector<T
 
 SliverRepair repair_slivers(std::vector<Point3>& nodes, std::vector<Tet>& tets, double target_deg) {
   SliverRepair report;
-  report.min_dihedral_before_deg = mesh_quality(nodes, tets).min_dihedral_deg;
+  bool changed_any = false;
   for (int pass = 0; pass < 20; ++pass) {
-    RepairMesh mesh(nodes, tets);
     std::vector<std::pair<double, int>> bad;
-    for (int t = 0; t < static_cast<int>(tets.size()); ++t)
-      if (const double q = mesh.quality(t); q < target_deg) bad.push_back({q, t});
+    double worst = tets.empty() ? 0 : 180;
+    for (int t = 0; t < static_cast<int>(tets.size()); ++t) {
+      const double q = min_dihedral_deg(nodes, tets[t]);
+      worst = std::min(worst, q);
+      if (q < target_deg) bad.push_back({q, t});
+    }
+    if (pass == 0) report.min_dihedral_before_deg = report.min_dihedral_after_deg = worst;
     if (bad.empty()) break;
+    RepairMesh mesh(nodes, tets);
     std::sort(bad.begin(), bad.end());
     bool changed = false;
     for (const auto& [q, t] : bad) {
@@ -446,9 +409,10 @@ SliverRepair repair_slivers(std::vector<Point3>& nodes, std::vector<Tet>& tets, 
       }
     }
     mesh.compact();
+    changed_any = changed_any || changed;
     if (!changed) break;
   }
-  report.min_dihedral_after_deg = mesh_quality(nodes, tets).min_dihedral_deg;
+  if (changed_any) report.min_dihedral_after_deg = mesh_quality(nodes, tets).min_dihedral_deg;
   return report;
 }
 

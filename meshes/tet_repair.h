@@ -22,6 +22,10 @@ using Point3 = std::array<double, 3>;
 using Tet = std::array<int, 4>;
 using Triangle = std::array<int, 3>;
 
+// The face opposite vertex f, ordered so that its normal (1 - 0) x (2 - 0) points out of a
+// positively oriented element.
+inline constexpr int kTetFace[4][3] = {{1, 2, 3}, {0, 3, 2}, {0, 1, 3}, {0, 2, 1}};
+
 double tet_signed_volume(const Point3& a, const Point3& b, const Point3& c, const Point3& d);
 
 // The six dihedral angles (degrees) of a positively oriented tetrahedron.
@@ -36,6 +40,9 @@ std::vector<Triangle> boundary_faces(const std::vector<Tet>& tets);
 // True when every face belongs to one or two elements and the boundary faces form a closed
 // 2-manifold: each boundary edge in exactly two boundary faces, each boundary node's faces one fan.
 bool boundary_is_closed_manifold(const std::vector<Tet>& tets);
+
+// Both at once (one pass over the faces).
+std::vector<Triangle> boundary_faces(const std::vector<Tet>& tets, bool* closed_manifold);
 
 struct QualityReport {
   double min_dihedral_deg = 0, max_dihedral_deg = 0;

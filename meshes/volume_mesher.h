@@ -39,6 +39,10 @@ struct MeshingSettings {
   // The smallest dihedral angle asked of the mesh: the paths of meshes/gmsh_fill.h are tried until
   // one reaches it (VolumeMesh::quality_met says whether one did).
   double min_dihedral_deg = 10;
+  // And the smallest radius ratio (3 r / R: 1 regular, 0 flat) asked of every element.
+  double min_radius_ratio = 0.1;
+  // false: no restricted Delaunay surface; only the surfaces contoured by VTK (remeshed by Gmsh).
+  bool restricted_surface = true;
   // Refinement: elements of refine_size_mm within refine_radius_mm of refine_center_mm, grading to
   // element_size_mm over one more radius (none when the radius is 0).
   std::array<double, 3> refine_center_mm{0, 0, 0};
@@ -60,7 +64,7 @@ struct VolumeMesh {
   SliverRepair repair;            // what the sliver repair did after Gmsh
   double surface_offset_mm = 0;   // how far the boundary was moved out to keep the segmented volume
   // How the mesh was made: the path taken (meshes/gmsh_fill.h's describe), each path tried with its
-  // outcome, whether the smallest dihedral angle reached MeshingSettings::min_dihedral_deg, and the
+  // outcome, whether the smallest dihedral angle and radius ratio reached MeshingSettings's, and the
   // seconds of each phase ("surface", "volume mesh", "optimisation": Gmsh's optimisers and the
   // sliver repair of the mesh kept).
   std::string path;

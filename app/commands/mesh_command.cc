@@ -40,6 +40,7 @@ struct MeshOptions {
   std::optional<double> threshold_percentile;  // or a percentile of the smoothed volume
   // (default: halfway between the 5th and 95th percentiles)
   std::string smoothing = "gaussian";
+  std::string surface = "restricted";
   double smoothing_mm = 1.0;
   int closing = 2;
   double size_mm = 3;
@@ -111,6 +112,7 @@ int run_mesh(const MeshOptions& o) {
     settings.element_size_mm = o.size_mm;
     settings.partitions = o.partitions;
     settings.min_dihedral_deg = o.min_dihedral_deg;
+    settings.restricted_surface = o.surface == "restricted";
     if (!o.refine.empty()) {
       settings.refine_center_mm = {o.refine[0], o.refine[1], o.refine[2]};
       settings.refine_radius_mm = o.refine[3], settings.refine_size_mm = o.refine[4];
@@ -143,9 +145,11 @@ int run_mesh(const MeshOptions& o) {
     std::string tried;
     for (const auto& a : mesh.attempts) tried += "\n  " + a;
     std::fprintf(stderr,
-                 "error: %s: no mesh reached the smallest dihedral angle asked, %.1f deg (the best, %.1f deg, by %s, is written "
-                 "as %s to look at; a smaller --size or a smoother segmentation usually helps). Paths tried:%s\n",
-                 o.volume.c_str(), o.min_dihedral_deg, mesh.quality.min_dihedral_deg, mesh.path.c_str(),
+                 "error: %s: no mesh reached the quality asked, a smallest dihedral angle of %.1f deg and radius ratio of "
+                 "%.2f (the best, %.1f deg and %.3f, by %s, is written as %s to look at; a smaller --size or a smoother "
+                 "segmentation usually helps). Paths tried:%s\n",
+                 o.volume.c_str(), o.min_dihedral_deg, meshes::MeshingSettings{}.min_radius_ratio, mesh.quality.min_dihedral_deg,
+                 mesh.quality.min_radius_ratio, mesh.path.c_str(),
                  rejected.string().c_str(), tried.c_str());
     return kExitFailure;
   }
@@ -274,16 +278,18 @@ void add_mesh_command(CLI::App& parent, int& exit_code) {
   CLI::App* cmd = parent.add_subcommand("mesh", "Mesh an ultrasound volume or label map into tetrahedra");
   cmd->footer(
       "Segments the volume (a label map with --labels, the fetal pipeline with --fetus, otherwise a\n"
-      "threshold after smoothing: the largest region, closed and hole-filled), extracts and cleans its\n"
-      "surface on a grid of a third of --size (flying edges, non-shrinking smoothing, decimation), fills\n"
-      "it with tetrahedra by Gmsh at --size, optimises them and reports their quality and each phase's\n"
-      "time. Gmsh's paths are tried in turn (the surface remeshed + HXT, the surface as it is + HXT,\n"
-      "the surface as it is + Delaunay) until one gives a valid mesh whose smallest dihedral angle\n"
-      "reaches --min-dihedral; the report names the path. Writes MESH.msh (4.1; physical groups\n"
-      "`surface` and `tissue`) and MESH.vtu, in metres. Exit 0 with a closed, manifold boundary, no\n"
-      "inverted or degenerate element and the angle reached; exit 1 when no path reached the angle (the\n"
-      "best mesh written as MESH.rejected.vtu, MESH.msh and MESH.vtu untouched); exit 2 when the input\n"
-      "cannot be meshed at all (the reason, and where Gmsh names one, the place in mm).\n"
+      "threshold after smoothing: the largest region, closed and hole-filled); a segmentation nowhere\n"
+      "thicker than a quarter of --size is refused. CGAL samples its surface by Delaunay refinement\n"
+      "(triangles of --size, angles of 25 deg or more, within half a voxel of it; closed, manifold and\n"
+      "never crossing itself) and HXT fills it; then the sliver repair, and the boundary moved out to\n"
+      "the segmented volume. When that misses the quality, the same with smaller triangles, then\n"
+      "surfaces contoured by VTK (remeshed by Gmsh, as they are, smoother); the report names the path\n"
+      "and each phase's time. Writes MESH.msh (4.1; physical groups `surface` and `tissue`) and\n"
+      "MESH.vtu, in metres. Exit 0 with a closed, manifold boundary, no inverted or degenerate element,\n"
+      "the smallest dihedral angle at least --min-dihedral and every radius ratio at least 0.1; exit 1\n"
+      "when no path reached that (the best mesh written as MESH.rejected.vtu, MESH.msh and MESH.vtu\n"
+      "untouched); exit 2 when the input cannot be meshed at all (the reason, and where Gmsh names one,\n"
+      "the place in mm).\n"
       "With --regions, one mesh of the regions' union whose elements each take the region covering most\n"
       "of them (the regions share their interfaces node for node; an interface follows element faces),\n"
       "volume groups named as given, surface groups NAME_outer and one per interface, A_B (the\n"
@@ -305,6 +311,11 @@ void add_mesh_command(CLI::App& parent, int& exit_code) {
   cmd->add_option("--threshold-percentile", o->threshold_percentile,
                   "Threshold at this percentile of the smoothed volume's intensities, 0 to 100")
       ->check(CLI::Range(0.0, 100.0));
+  cmd->add_option("--surface", o->surface,
+                  "How the surface is made: restricted (CGAL's restricted Delaunay surface first, then the others) or "
+                  "contoured (only VTK's contour, remeshed by Gmsh or kept: the mesher before CGAL)")
+      ->check(CLI::IsMember({"restricted", "contoured"}))
+      ->capture_default_str();
   cmd->add_option("--smoothing", o->smoothing, "Speckle filter before the threshold: none, gaussian or median (3x3x3)")
       ->check(CLI::IsMember({"none", "gaussian", "median"}))
       ->capture_default_str();
