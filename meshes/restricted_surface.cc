@@ -2,6 +2,8 @@
 // unit that includes CGAL: its templates are heavy.
 #include "meshes/restricted_surface.h"
 
+#include "imaging/separable_filter.h"
+
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
 #include <CGAL/Image_3.h>
 #include <CGAL/Labeled_mesh_domain_3.h>
@@ -32,44 +34,23 @@ using Triangulation = CGAL::Mesh_triangulation_3<Domain, CGAL::Default, CGAL::Se
 using Complex = CGAL::Mesh_complex_3_in_triangulation_3<Triangulation>;
 using Criteria = CGAL::Mesh_criteria_3<Triangulation>;
 
-constexpr int kPad = 4;
+constexpr int kPad = 4;  // empty voxels around the mask, so that its level closes at the faces
 
 constexpr const char* kTooThin =
     "meshing: no part of the segmentation is thick enough to have a surface once its voxels' steps are smoothed (a "
-    "single voxel, a line or a diagonal chain of voxels)";  // empty voxels around the mask, so that its level closes at the faces
+    "single voxel, a line or a diagonal chain of voxels)";
 
-// The mask (0/1) padded and blurred by a Gaussian of `sigma` voxels along each axis in turn.
+// The mask (0/1) padded and blurred by a Gaussian of `sigma` voxels (imaging's separable filter).
 std::vector<float> blurred_mask(const MaskVolume& mask, double sigma, std::array<int, 3>& n) {
   for (int d = 0; d < 3; ++d) n[d] = mask.dimensions[d] + 2 * kPad;
-  const auto at = [&](int i, int j, int k) { return (std::size_t(k) * n[1] + j) * n[0] + i; };
-  std::vector<float> field(static_cast<std::size_t>(n[0]) * n[1] * n[2], 0.f), line;
+  std::vector<float> field(static_cast<std::size_t>(n[0]) * n[1] * n[2], 0.f);
   for (int k = 0; k < mask.dimensions[2]; ++k)
     for (int j = 0; j < mask.dimensions[1]; ++j)
       for (int i = 0; i < mask.dimensions[0]; ++i)
         if (mask.data[(std::size_t(k) * mask.dimensions[1] + j) * mask.dimensions[0] + i])
-          field[at(i + kPad, j + kPad, k + kPad)] = 1.f;
-  const int r = static_cast<int>(std::ceil(3 * sigma));
-  std::vector<float> w(std::size_t(2 * r + 1));
-  float total = 0;
-  for (int x = -r; x <= r; ++x) total += w[std::size_t(x + r)] = static_cast<float>(std::exp(-0.5 * x * x / (sigma * sigma)));
-  for (auto& v : w) v /= total;
-  for (int d = 0; d < 3; ++d) {
-    const std::size_t stride = d == 0 ? 1 : d == 1 ? std::size_t(n[0]) : std::size_t(n[0]) * n[1];
-    line.assign(std::size_t(n[d]), 0.f);
-    const int a = d == 0 ? 1 : 0, b = d == 2 ? 1 : 2;  // the two other axes
-    for (int u = 0; u < n[a]; ++u)
-      for (int v = 0; v < n[b]; ++v) {
-        std::array<int, 3> start{0, 0, 0};
-        start[a] = u, start[b] = v;
-        const std::size_t base = at(start[0], start[1], start[2]);
-        for (int x = 0; x < n[d]; ++x) line[std::size_t(x)] = field[base + std::size_t(x) * stride];
-        for (int x = 0; x < n[d]; ++x) {
-          float sum = 0;
-          for (int y = std::max(0, x - r); y <= std::min(n[d] - 1, x + r); ++y) sum += w[std::size_t(y - x + r)] * line[std::size_t(y)];
-          field[base + std::size_t(x) * stride] = sum;
-        }
-      }
-  }
+          field[(std::size_t(k + kPad) * n[1] + (j + kPad)) * n[0] + (i + kPad)] = 1.f;
+  const std::vector<double> kernel = imaging::gaussian_kernel(sigma);
+  for (int axis = 0; axis < 3; ++axis) imaging::convolve_axis(field, n, axis, kernel, imaging::Faces::renormalised);
   return field;
 }
 

@@ -18,6 +18,17 @@ double norm(const Point3& a) { return std::sqrt(dot(a, a)); }
 
 constexpr auto& kFace = kTetFace;
 
+// The unit outward normal of each face (kFace's order) of a positively oriented element.
+std::array<Point3, 4> unit_outward_normals(const std::array<Point3, 4>& p) {
+  std::array<Point3, 4> n{};
+  for (int f = 0; f < 4; ++f) {
+    n[f] = cross(sub(p[kFace[f][1]], p[kFace[f][0]]), sub(p[kFace[f][2]], p[kFace[f][0]]));
+    const double length = norm(n[f]);
+    for (double& x : n[f]) x /= length;
+  }
+  return n;
+}
+
 // A mesh being repaired: the elements (dead ones marked), and for each node the live elements
 // that use it. Every adjacency question (is this face, edge or node on the boundary; which
 // elements share this edge) is answered from those lists.
@@ -260,15 +271,9 @@ double tet_signed_volume(const Point3& a, const Point3& b, const Point3& c, cons
 }
 
 std::array<double, 6> dihedral_angles_deg(const Point3& a, const Point3& b, const Point3& c, const Point3& d) {
-  // Outward unit normals; the dihedral angle at the edge shared by faces f and g is pi minus the
-  // angle between their normals.
-  const Point3 p[4] = {a, b, c, d};
-  Point3 n[4];
-  for (int f = 0; f < 4; ++f) {
-    n[f] = cross(sub(p[kFace[f][1]], p[kFace[f][0]]), sub(p[kFace[f][2]], p[kFace[f][0]]));
-    const double length = norm(n[f]);
-    for (double& x : n[f]) x /= length;
-  }
+  // The dihedral angle at the edge shared by faces f and g is pi minus the angle between their
+  // outward normals.
+  const auto n = unit_outward_normals({a, b, c, d});
   std::array<double, 6> angles{};
   int k = 0;
   for (int f = 0; f < 4; ++f)
@@ -277,16 +282,11 @@ std::array<double, 6> dihedral_angles_deg(const Point3& a, const Point3& b, cons
 }
 
 double min_dihedral_deg(const std::vector<Point3>& nodes, const Tet& t) {
-  const Point3 p[4] = {nodes[t[0]], nodes[t[1]], nodes[t[2]], nodes[t[3]]};
-  if (!(tet_signed_volume(p[0], p[1], p[2], p[3]) > 0)) return 0;
-  // The smallest angle is at the pair of faces whose outward normals are least opposed: pi minus
-  // the angle between them, one arc cosine for the element.
-  Point3 n[4];
-  for (int f = 0; f < 4; ++f) {
-    n[f] = cross(sub(p[kFace[f][1]], p[kFace[f][0]]), sub(p[kFace[f][2]], p[kFace[f][0]]));
-    const double length = norm(n[f]);
-    for (double& x : n[f]) x /= length;
-  }
+  const Point3 &a = nodes[t[0]], &b = nodes[t[1]], &c = nodes[t[2]], &d = nodes[t[3]];
+  if (!(tet_signed_volume(a, b, c, d) > 0)) return 0;
+  // The smallest angle is at the pair of faces whose outward normals are least opposed: one arc
+  // cosine for the element.
+  const auto n = unit_outward_normals({a, b, c, d});
   double least = 1;
   for (int f = 0; f < 4; ++f)
     for (int g = f + 1; g < 4; ++g) least = std::min(least, dot(n[f], n[g]));

@@ -84,6 +84,22 @@ void report(const MeshingSettings& s, const std::string& step, double done) {
   if (s.progress) s.progress(step, done);
 }
 
+// Nodes and triangles as VTK's polygonal data.
+vtkSmartPointer<vtkPolyData> triangle_surface(const std::vector<Point3>& nodes, const std::vector<Triangle>& triangles) {
+  auto points = vtkSmartPointer<vtkPoints>::New();
+  points->SetDataTypeToDouble();
+  for (const auto& p : nodes) points->InsertNextPoint(p.data());
+  auto cells = vtkSmartPointer<vtkCellArray>::New();
+  for (const auto& t : triangles) {
+    const vtkIdType ids[3] = {t[0], t[1], t[2]};
+    cells->InsertNextCell(3, ids);
+  }
+  auto surface = vtkSmartPointer<vtkPolyData>::New();
+  surface->SetPoints(points);
+  surface->SetPolys(cells);
+  return surface;
+}
+
 // Refuses settings that make no sense or a mesh too large for the memory, from the volume to fill.
 void check_settings(double volume_mm3, const MeshingSettings& s) {
   if (!(s.element_size_mm > 0)) throw std::runtime_error("meshing: the element size must be positive");
@@ -326,19 +342,8 @@ vtkSmartPointer<vtkPolyData> restricted_delaunay_surface(const MaskVolume& mask,
   const double voxel = std::min({mask.spacing_mm[0], mask.spacing_mm[1], mask.spacing_mm[2]});
   const RestrictedSurface restricted = restricted_surface(mask, s, 0.5 * voxel);
   *pieces = restricted.pieces;
-  auto points = vtkSmartPointer<vtkPoints>::New();
-  points->SetDataTypeToDouble();
-  for (const auto& p : restricted.nodes_mm) points->InsertNextPoint(p.data());
-  auto cells = vtkSmartPointer<vtkCellArray>::New();
-  for (const auto& t : restricted.triangles) {
-    const vtkIdType ids[3] = {t[0], t[1], t[2]};
-    cells->InsertNextCell(3, ids);
-  }
-  auto surface = vtkSmartPointer<vtkPolyData>::New();
-  surface->SetPoints(points);
-  surface->SetPolys(cells);
   auto largest = vtkSmartPointer<vtkPolyDataConnectivityFilter>::New();
-  largest->SetInputData(surface);
+  largest->SetInputData(triangle_surface(restricted.nodes_mm, restricted.triangles));
   largest->SetExtractionModeToLargestRegion();
   auto clean = vtkSmartPointer<vtkCleanPolyData>::New();
   clean->SetInputConnection(largest->GetOutputPort());
@@ -374,6 +379,15 @@ VolumeMesh mesh_mask(const MaskVolume& mask, const MeshingSettings& s) {
   VolumeMesh best;
   bool have = false;
   std::string failures;
+  // The mesh kept, with every try and each phase's time.
+  const auto done = [&] {
+    best.attempts = attempts;
+    best.phases = {{"surface", surface_seconds},
+                   {"volume mesh", fill_seconds - best.optimisation_seconds},
+                   {"optimisation", best.optimisation_seconds}};
+    report(s, "done", 1.0);
+    return std::move(best);
+  };
   // First CGAL's restricted Delaunay surface filled by HXT: closed, manifold and without crossing
   // triangles by construction; if the sliver repair cannot bring that mesh to the angle asked, the
   // same with smaller triangles (another Delaunay mesh: on a brain at 8 mm the worst element varied
@@ -408,13 +422,7 @@ VolumeMesh mesh_mask(const MaskVolume& mask, const MeshingSettings& s) {
       attempts.push_back(name + std::string(describe(FillPath::restricted_hxt)) + ": failed: " + e.what());
     }
     fill_seconds += seconds_since(phase);
-    if (have && best.quality_met) {
-      best.attempts = attempts;
-      best.phases = {{"surface", surface_seconds}, {"volume mesh", fill_seconds - best.optimisation_seconds},
-                     {"optimisation", best.optimisation_seconds}};
-      report(s, "done", 1.0);
-      return best;
-    }
+    if (have && best.quality_met) return done();
   }
   for (const bool smoother : {false, true}) {
     auto phase = std::chrono::steady_clock::now();
@@ -444,33 +452,18 @@ VolumeMesh mesh_mask(const MaskVolume& mask, const MeshingSettings& s) {
     if (have && best.quality_met) break;
   }
   if (!have) throw std::runtime_error("meshing: " + failures);
-  best.attempts = attempts;
-  best.phases = {{"surface", surface_seconds},
-                 {"volume mesh", fill_seconds - best.optimisation_seconds},
-                 {"optimisation", best.optimisation_seconds}};
-  report(s, "done", 1.0);
-  return best;
+  return done();
 }
 
 VolumeMesh mesh_triangle_surface(const std::vector<Point3>& nodes_mm, const std::vector<Triangle>& triangles,
                                  const MeshingSettings& s) {
-  auto surface = vtkSmartPointer<vtkPolyData>::New();
-  auto points = vtkSmartPointer<vtkPoints>::New();
-  points->SetDataTypeToDouble();
-  for (const auto& p : nodes_mm) points->InsertNextPoint(p.data());
-  auto cells = vtkSmartPointer<vtkCellArray>::New();
-  for (const auto& t : triangles) {
+  for (const auto& t : triangles)
     for (int v : t)
       if (v < 0 || v >= static_cast<int>(nodes_mm.size()))
         throw std::runtime_error("meshing: a triangle refers to node " + std::to_string(v) + " of " +
                                  std::to_string(nodes_mm.size()));
-    const vtkIdType ids[3] = {t[0], t[1], t[2]};
-    cells->InsertNextCell(3, ids);
-  }
-  surface->SetPoints(points);
-  surface->SetPolys(cells);
   if (triangles.empty()) throw std::runtime_error("meshing: the surface has no triangle");
-  VolumeMesh mesh = fill_surface(surface, s, VolumeMesh{}, {FillPath::remeshed_hxt, FillPath::surface_hxt}, "");
+  VolumeMesh mesh = fill_surface(triangle_surface(nodes_mm, triangles), s, VolumeMesh{}, {FillPath::remeshed_hxt, FillPath::surface_hxt}, "");
   report(s, "done", 1.0);
   return mesh;
 }
