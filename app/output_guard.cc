@@ -51,6 +51,19 @@ void replace_when_written(const fs::path& path, const std::function<void(const f
   temporary.replace_filename("." + path.stem().string() + ".writing" + std::to_string(::getpid()) + path.extension().string());
   try {
     write(temporary);
+  } catch (const std::exception& e) {
+    std::error_code ignored;
+    fs::remove(temporary, ignored);
+    // The writer knew only the temporary name: the user gave `path`, and that is what they look for.
+    std::string message = e.what();
+    bool named = false;
+    for (const std::string& name : {temporary.string(), temporary.filename().string()})
+      for (std::size_t at = message.find(name); !name.empty() && at != std::string::npos; at = message.find(name, at)) {
+        message.replace(at, name.size(), name == temporary.string() ? path.string() : path.filename().string());
+        named = true;
+      }
+    if (!named) throw;
+    throw std::runtime_error(message);
   } catch (...) {
     std::error_code ignored;
     fs::remove(temporary, ignored);

@@ -18,6 +18,9 @@ haptics::Trajectory probe_trajectory(const config::Probe& probe, int index, cons
 std::unique_ptr<fem::TissueModel> build_session_tissue(const config::Scene& scene) {
   log::info() << "building the tissue model of " << scene.name;
   std::unique_ptr<fem::TissueModel> model = fem::build_tissue_model(scene);
+  if (model->pieces > 1)
+    log::warning() << scene.name << ": the mesh falls into " << model->pieces
+                   << " separate pieces (each held by its supports); they do not touch each other";
   // Inertia (and damping): each frame's solve is one time step of the solver's period.
   if (const auto dynamics = fem::scene_dynamics(scene, model.get())) model->solver->enable_dynamics(*dynamics);
   return model;
@@ -41,6 +44,19 @@ SceneRig build_scene_rig(const config::Scene& scene, const haptics::HapticLoopSe
   }
   rig.environment = std::make_unique<fem::FemEnvironment>(std::move(model->solver), model->newton);
   return rig;
+}
+
+std::string physical_advice(const config::Scene& scene) {
+  bool svk = scene.material.model == config::MaterialModel::saint_venant_kirchhoff;
+  for (const auto& region : scene.materials) svk = svk || region.material.model == config::MaterialModel::saint_venant_kirchhoff;
+  bool loaded = scene.effects.has(config::Effect::gravity);
+  for (const config::BoundaryRegion& region : scene.boundary) loaded = loaded || region.type == config::BoundaryType::traction;
+  if (svk && loaded)
+    return "; Saint Venant-Kirchhoff softens in compression (a fibre's stress peaks when it is compressed by 42 %, "
+           "stretch 1/sqrt(3), and falls after), so a soft block collapses under its own weight or a traction: use "
+           "neo_hookean, or a stiffer material";
+  if (loaded) return "; the tissue may be too soft for its weight or tractions: a stiffer material or more supports";
+  return "";
 }
 
 }  // namespace fetouch::app

@@ -35,6 +35,10 @@ haptics::Trajectory probe_trajectory(const config::Probe& probe, int index, cons
 // replay`, `run`, the trainer and the studies build. Throws std::runtime_error naming what is wrong.
 std::unique_ptr<fem::TissueModel> build_session_tissue(const config::Scene& scene);
 
+// What to change when the tissue of `scene` fails for a physical reason (fem::PhysicalProblem), as
+// "; ..." to append to the reason, or "" when the scene says nothing more.
+std::string physical_advice(const config::Scene& scene);
+
 // Builds the session's tissue (build_session_tissue) and the devices.
 // Throws std::runtime_error naming what is wrong.
 SceneRig build_scene_rig(const config::Scene& scene, const haptics::HapticLoopSettings& settings,

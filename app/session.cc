@@ -11,10 +11,13 @@
 #include <chrono>
 #include <cmath>
 #include <exception>
+#include <iostream>
 #include <mutex>
+#include <optional>
 #include <stdexcept>
 #include <thread>
 
+#include "app/progress.h"
 #include "app/realtime_cores.h"
 #include "haptics/lock_free.h"
 
@@ -166,6 +169,9 @@ SessionSummary run_lockstep(haptics::Environment& environment, std::vector<std::
   const int m = base.devices();
   const long ticks = base.ticks();
   const double period = settings.loop.period_s;
+  std::optional<Progress> progress;  // frames done, on standard error
+  std::string first_failure;
+  if (settings.progress) progress.emplace("frames", ticks / settings.loop.ratio, std::cerr, Progress::stderr_is_terminal());
 
   // Buffers sized once: the tick loop below only fills them.
   const std::size_t batch = 1000;
@@ -193,12 +199,18 @@ SessionSummary run_lockstep(haptics::Environment& environment, std::vector<std::
     if (k % settings.loop.ratio == 0 && k > 0) {
       const FrameRecord f = frame_record(loop.newest(), k * period);
       base.take_frame(f);
+      if (!f.converged && first_failure.empty())
+        first_failure = "at " + std::to_string(f.time_s) + " s: " + loop.newest().update.status.message;
       if (settings.after_frame) settings.after_frame(f);
+      if (progress) progress->update(k / settings.loop.ratio);
     }
     if (filled == batch) drain();
   }
   drain();
-  return base.finish();
+  if (progress) progress->finish();
+  SessionSummary summary = base.finish();
+  summary.first_failure = first_failure;
+  return summary;
 }
 
 namespace {

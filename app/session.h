@@ -60,6 +60,7 @@ struct SessionSettings {
   // Called after each frame's answer (outside the tick): its row of the recording.
   std::function<void(const FrameRecord&)> after_frame;
   bool keep_forces = false;                 // the summary keeps every force sent (studies)
+  bool progress = false;                    // lockstep: frames done and the expected end on stderr
   // Real time: ask for SCHED_FIFO for the haptic thread (granted to root or with CAP_SYS_NICE;
   // without it the thread runs at normal priority, and the summary says so).
   bool realtime_priority = true;
@@ -94,6 +95,7 @@ struct SessionSummary {
   long ticks = 0, frames = 0;
   double solve_p50_s = 0, solve_p99_s = 0, solve_max_s = 0;  // the environment's solve times
   long newton_failures = 0;
+  std::string first_failure;         // lockstep: the first failed frame's time and reason ("" if none)
   double max_force_n = 0;            // the largest force sent to a device
   double min_stability_margin = 1;   // 1 - spectral radius of the chosen gains, over the frames
   long frames_with_unstable_gains = 0;

@@ -3,6 +3,10 @@
 #include <deal.II/fe/fe_values.h>
 #include <deal.II/fe/fe_values_extractors.h>
 
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <memory>
 #include <stdexcept>
 
 namespace fetouch::fem {
@@ -11,23 +15,71 @@ using namespace dealii;
 
 namespace {
 
+// A face larger than the patch would put few or none of its quadrature points under the kernel (a
+// 1 mm probe on 50 mm faces: none, and no patch). Such a face is integrated on its subdivision into
+// m x m similar pieces, m = ceil(face diameter / radius), each with the face's own rule mapped
+// into it: the kernel is then sampled at spacings no coarser than on a face of the radius's size,
+// whatever the mesh, and the integral (hence H, the force's distribution and W) converges with the
+// mesh as on fine faces. A face no larger than the radius keeps its rule (m = 1).
+constexpr unsigned int kMaxSubdivisions = 128;
+
+unsigned int face_subdivisions(double face_diameter, double radius) {
+  const double m = std::ceil(face_diameter / radius);
+  return m <= 1 ? 1 : static_cast<unsigned int>(std::min<double>(m, kMaxSubdivisions));
+}
+
+// The rule `base` on the reference face (unit square, or the triangle (0,0), (1,0), (0,1)) copied
+// into each of its m x m pieces by the affine map of that piece.
+Quadrature<2> subdivided(const Quadrature<2>& base, bool triangle, unsigned int m) {
+  std::vector<Point<2>> points;
+  std::vector<double> weights;
+  const double h = 1.0 / m;
+  const auto copy = [&](const Point<2>& origin, const Tensor<1, 2>& e0, const Tensor<1, 2>& e1) {
+    const double area = std::abs(e0[0] * e1[1] - e0[1] * e1[0]);  // of the piece, in units of the face's
+    for (unsigned int q = 0; q < base.size(); ++q) {
+      const Point<2>& x = base.point(q);
+      points.push_back(origin + x[0] * e0 + x[1] * e1);
+      weights.push_back(base.weight(q) * area);
+    }
+  };
+  const Tensor<1, 2> ex({h, 0}), ey({0, h});
+  for (unsigned int i = 0; i < m; ++i)
+    for (unsigned int j = 0; j < m; ++j) {
+      const Point<2> corner(i * h, j * h);
+      if (!triangle) {
+        copy(corner, ex, ey);
+        continue;
+      }
+      if (i + j < m) copy(corner, ex, ey);                     // the piece pointing like the face
+      if (i + j + 1 < m) copy(corner + ex + ey, -ex, -ey);     // the one pointing the other way
+    }
+  return Quadrature<2>(points, weights);
+}
+
 // Calls visit(cell, face_values, q, w, first) at every boundary quadrature point within a patch's
 // radius: w = (1 - (d/r)^2)^2 JxW is the unnormalised kernel weight, `first` marks the first point
 // visited on a face (to evaluate per-face data once); face_values carries `flags`.
 template <class Visit>
 void for_each_patch_point(const Discretisation& d, const ContactPatchesTerm::Patch& p, UpdateFlags flags, Visit visit) {
-  FEFaceValues<3> face_values(*d.mapping, *d.fe, *d.face_quadrature, flags | update_JxW_values | update_quadrature_points);
+  flags = flags | update_JxW_values | update_quadrature_points;
+  std::map<unsigned int, std::unique_ptr<FEFaceValues<3>>> by_subdivision;  // built as faces need them
   for (const auto& cell : d.dof.active_cell_iterators())
     for (const unsigned int f : cell->face_indices()) {
       if (!cell->face(f)->at_boundary()) continue;
       // Skip faces that are entirely out of reach (a cheap bound through the face's diameter).
-      if (cell->face(f)->center().distance(p.center) > p.radius + cell->face(f)->diameter()) continue;
-      face_values.reinit(cell, f);
+      const double diameter = cell->face(f)->diameter();
+      if (cell->face(f)->center().distance(p.center) > p.radius + diameter) continue;
+      const unsigned int m = face_subdivisions(diameter, p.radius);
+      std::unique_ptr<FEFaceValues<3>>& face_values = by_subdivision[m];
+      if (!face_values)
+        face_values = std::make_unique<FEFaceValues<3>>(
+            *d.mapping, *d.fe, m == 1 ? *d.face_quadrature : subdivided(*d.face_quadrature, d.simplex, m), flags);
+      face_values->reinit(cell, f);
       bool first = true;
-      for (unsigned int q = 0; q < d.face_quadrature->size(); ++q) {
-        const double r = face_values.quadrature_point(q).distance(p.center) / p.radius;
+      for (unsigned int q = 0; q < face_values->n_quadrature_points; ++q) {
+        const double r = face_values->quadrature_point(q).distance(p.center) / p.radius;
         if (r >= 1) continue;
-        visit(cell, face_values, q, (1 - r * r) * (1 - r * r) * face_values.JxW(q), first);
+        visit(cell, *face_values, q, (1 - r * r) * (1 - r * r) * face_values->JxW(q), first);
         first = false;
       }
     }
@@ -104,11 +156,14 @@ Tensor<1, 3> ContactPatchesTerm::displacement(int patch, const Vector<double>& u
 Tensor<1, 3> ContactPatchesTerm::deformed_normal(int patch, const Vector<double>& u) const {
   const Patch& p = patches_.at(patch);
   const FEValuesExtractors::Vector displacement(0);
-  std::vector<Tensor<2, 3>> grad_u(d_.face_quadrature->size());
+  std::vector<Tensor<2, 3>> grad_u;
   Tensor<1, 3> sum;
   for_each_patch_point(d_, p, update_gradients | update_normal_vectors,
                        [&](const auto&, const FEFaceValues<3>& values, unsigned int q, double w, bool first) {
-                         if (first) values[displacement].get_function_gradients(u, grad_u);
+                         if (first) {
+                           grad_u.resize(values.n_quadrature_points);
+                           values[displacement].get_function_gradients(u, grad_u);
+                         }
                          Tensor<2, 3> F = grad_u[q];
                          for (int i = 0; i < 3; ++i) F[i][i] += 1;
                          sum += w * (determinant(F) * transpose(invert(F)) * values.normal_vector(q));

@@ -13,6 +13,8 @@
 #include <deal.II/lac/sparsity_pattern.h>
 #include <deal.II/lac/sparsity_tools.h>
 
+#include <Eigen/Dense>
+
 #include <algorithm>
 #include <cmath>
 #include <map>
@@ -138,6 +140,77 @@ std::vector<std::vector<double>> Discretisation::rigid_body_modes(const std::vec
     for (double& v : modes[a]) v /= norm;
   }
   return modes;
+}
+
+std::vector<Discretisation::Piece> Discretisation::pieces(const std::vector<bool>& constrained) const {
+  // Pieces: union-find over the vertices of every cell.
+  std::vector<unsigned int> parent(tria.n_vertices());
+  std::iota(parent.begin(), parent.end(), 0u);
+  const auto root = [&parent](unsigned int v) {
+    while (parent[v] != v) v = parent[v] = parent[parent[v]];
+    return v;
+  };
+  for (const auto& cell : tria.active_cell_iterators())
+    for (const unsigned int v : cell->vertex_indices()) parent[root(cell->vertex_index(v))] = root(cell->vertex_index(0));
+  std::map<unsigned int, unsigned int> piece_of_root;
+  std::vector<Piece> result;
+  std::vector<unsigned int> dof_piece(dof.n_dofs(), 0);
+  std::vector<types::global_dof_index> indices(fe->n_dofs_per_cell());
+  for (const auto& cell : dof.active_cell_iterators()) {
+    const auto [at, added] = piece_of_root.emplace(root(cell->vertex_index(0)), static_cast<unsigned int>(result.size()));
+    if (added) result.emplace_back();
+    ++result[at->second].cells;
+    cell->get_dof_indices(indices);
+    for (const types::global_dof_index i : indices) dof_piece[i] = at->second;
+  }
+  // Per piece: its centroid and size (to make rotations and translations commensurate), then the
+  // Gram matrix of the six modes over its constrained dofs.
+  std::map<types::global_dof_index, Point<3>> points;
+  DoFTools::map_dofs_to_support_points(*mapping, dof, points);
+  const std::vector<int> component = dof_components();
+  const std::size_t n = result.size();
+  std::vector<Point<3>> centre(n);
+  std::vector<double> count(n, 0), size(n, 0);
+  for (const auto& [i, x] : points) centre[dof_piece[i]] += x, count[dof_piece[i]] += 1;
+  for (std::size_t p = 0; p < n; ++p) centre[p] /= std::max(1.0, count[p]);
+  for (const auto& [i, x] : points) size[dof_piece[i]] = std::max(size[dof_piece[i]], x.distance(centre[dof_piece[i]]));
+  std::vector<Eigen::Matrix<double, 6, 6>> gram(n, Eigen::Matrix<double, 6, 6>::Zero());
+  for (const auto& [i, x] : points) {
+    if (!constrained[i]) continue;
+    const unsigned int p = dof_piece[i];
+    const int c = component[i];
+    const Tensor<1, 3> r = (x - centre[p]) / std::max(size[p], 1e-300);
+    Eigen::Matrix<double, 6, 1> row = Eigen::Matrix<double, 6, 1>::Zero();
+    row(c) = 1;
+    for (int a = 0; a < 3; ++a) {
+      Tensor<1, 3> axis;
+      axis[a] = 1;
+      row(3 + a) = cross_product_3d(axis, r)[c];
+    }
+    gram[p] += row * row.transpose();
+  }
+  static const char* const kMotion[6] = {"translation along x", "translation along y", "translation along z",
+                                         "rotation about x",    "rotation about y",    "rotation about z"};
+  for (std::size_t p = 0; p < n; ++p) {
+    const Eigen::SelfAdjointEigenSolver<Eigen::Matrix<double, 6, 6>> eigen(gram[p]);
+    // A held motion has an eigenvalue of the order of the constrained dofs on the piece's scale;
+    // a free one vanishes to round-off.
+    const double floor = 1e-9 * std::max(1.0, gram[p].trace());
+    Eigen::Matrix<double, 6, Eigen::Dynamic> free(6, 0);
+    for (int k = 0; k < 6; ++k)
+      if (eigen.eigenvalues()(k) < floor) {
+        free.conservativeResize(6, free.cols() + 1);
+        free.col(free.cols() - 1) = eigen.eigenvectors().col(k);
+      }
+    int named = 0;
+    for (int j = 0; j < 6; ++j)  // a basis motion that lies in the free space (its projection whole)
+      if (free.cols() > 0 && (free.transpose() * Eigen::Matrix<double, 6, 1>::Unit(j)).norm() > 1 - 1e-6) {
+        result[p].free_motions.emplace_back(kMotion[j]);
+        ++named;
+      }
+    for (int k = named; k < free.cols(); ++k) result[p].free_motions.emplace_back("rotation about the line its supports lie on");
+  }
+  return result;
 }
 
 void Discretisation::build_cells() const {

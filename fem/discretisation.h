@@ -17,6 +17,7 @@
 #include <mpi.h>
 
 #include <memory>
+#include <string>
 #include <vector>
 
 #include "fem/material.h"
@@ -56,6 +57,16 @@ class Discretisation {
   // The rigid-body modes (3 translations, 3 rotations about the centroid), orthonormal, zero on
   // constrained dofs: algebraic multigrid's near-null space.
   std::vector<std::vector<double>> rigid_body_modes(const std::vector<bool>& constrained) const;
+
+  // The body's pieces (cells joined through shared vertices), each with the rigid motions that the
+  // constrained dofs leave free ("translation along x", "rotation about z", or "rotation about the
+  // line its supports lie on"): none for a piece that is held. From the Gram matrix of the six
+  // rigid-body modes sampled at the piece's constrained dofs: a motion is free where it vanishes.
+  struct Piece {
+    unsigned int cells = 0;
+    std::vector<std::string> free_motions;
+  };
+  std::vector<Piece> pieces(const std::vector<bool>& constrained) const;
 
   // The per-cell data of a total Lagrangian assembly (built on first use; cell order).
   struct Cells {

@@ -9,6 +9,8 @@
 
 #include <Eigen/Cholesky>
 
+#include "fem/physical_problem.h"
+
 namespace fetouch::fem {
 
 FemEnvironment::FemEnvironment(std::unique_ptr<QuasiStaticSolver> solver, const NewtonSettings& newton)
@@ -37,7 +39,9 @@ void FemEnvironment::describe(haptics::EnvironmentUpdate& out) {
 
 void FemEnvironment::initial(haptics::EnvironmentUpdate& out) {
   const SolveReport report = solver_->solve(newton_);
-  if (!report.converged) throw std::runtime_error("FemEnvironment: the unloaded tissue does not solve: " + report.failure);
+  if (!report.converged)
+    throw PhysicalProblem("the tissue finds no rest state under its supports and static loads (its weight, tractions) "
+                          "before any probe touches it: " + report.failure);
   describe(out);
   out.status = {};
   out.frame = -1;

@@ -6,6 +6,15 @@ namespace fetouch::fem {
 
 using namespace dealii;
 
+Dynamics Dynamics::hht(double alpha_h) {
+  Dynamics d;
+  d.newmark = true;
+  d.hht_alpha = alpha_h;
+  d.beta = (1 - alpha_h) * (1 - alpha_h) / 4;
+  d.gamma = (1 - 2 * alpha_h) / 2;
+  return d;
+}
+
 InertiaTerm::InertiaTerm(const Discretisation& discretisation, const Dynamics& dynamics)
     : d_(discretisation), dynamics_(dynamics) {
   const double dt = dynamics.time_step_s;
@@ -16,6 +25,10 @@ InertiaTerm::InertiaTerm(const Discretisation& discretisation, const Dynamics& d
   u_old_.reinit(d_.n_dofs());
   v_old_.reinit(d_.n_dofs());
   a_old_.reinit(d_.n_dofs());
+  if (dynamics.newmark && dynamics.hht_alpha != 0) {
+    mass_scale_ = 1 / (1 + dynamics.hht_alpha);
+    carried_.reinit(d_.n_dofs());
+  }
   const Discretisation::Cells& c = d_.cells();
   density_.assign(d_.n_cells(), dynamics.density_kg_per_m3);
   for (unsigned int k = 0; k < d_.n_cells(); ++k)
@@ -47,46 +60,63 @@ void InertiaTerm::accept(const Vector<double>& u) {  // advance the time-steppin
     a_old_[i] = a_new;
     v_old_[i] = v_new;
   }
+  if (carried_.size() == 0) return;
+  // Q+ = (alpha_h Q - M a+) / (1 + alpha_h), each rank's part from its own cells.
+  Vector<double> mass_acceleration(u.size());
+  mass_times(a_old_, mass_acceleration.begin(), 0, nullptr);
+  const double alpha_h = dynamics_.hht_alpha;
+  for (types::global_dof_index i = 0; i < u.size(); ++i)
+    carried_[i] = (alpha_h * carried_[i] - mass_acceleration[i]) * mass_scale_;
 }
 
-// M (a+ + alpha v+) with the consistent mass into f_int, (c0 + alpha dv+/du+) M into the tangent.
-bool InertiaTerm::assemble(const AssemblyState& state, AssemblyTarget& target) {
+void InertiaTerm::mass_times(const Vector<double>& x, double* out, double gain, AssemblyTarget* target) const {
   const Discretisation::Cells& c = d_.cells();
-  const std::vector<bool>& constrained = target.system->constrained();
-  const Vector<double>& u = state.u;
-  inertial_.reinit(u.size(), /*omit_zeroing_entries=*/true);
-  for (types::global_dof_index i = 0; i < u.size(); ++i) {
-    const double a_new = acceleration(u[i], i);
-    inertial_[i] = a_new + dynamics_.rayleigh_mass_per_s * velocity(u[i], a_new, i);
-  }
-  const double gain = c0_ + dynamics_.rayleigh_mass_per_s * velocity_gain();
   const unsigned int n = c.n, nq = c.nq;
-  std::vector<double> local(n), cell_internal(n), cell_matrix(std::size_t(n) * n);
+  const bool tangent = target && target->tangent;
+  std::vector<double> local(n), cell_out(n), cell_matrix(std::size_t(n) * n);
   for (const unsigned int k : d_.my_cells) {
     const types::global_dof_index* indices = &c.indices[std::size_t(k) * n];
-    d_.gather(k, inertial_, local.data());
-    std::fill(cell_internal.begin(), cell_internal.end(), 0.0);
-    std::fill(cell_matrix.begin(), cell_matrix.end(), 0.0);
+    d_.gather(k, x, local.data());
+    std::fill(cell_out.begin(), cell_out.end(), 0.0);
+    if (tangent) std::fill(cell_matrix.begin(), cell_matrix.end(), 0.0);
     for (unsigned int q = 0; q < nq; ++q) {
       const double* shape = &c.shape_values[q * c.nbase];
       const double w = density_[k] * c.jxw[std::size_t(k) * nq + q];
       double field[3] = {0, 0, 0};
       for (unsigned int j = 0; j < n; ++j) field[c.component[j]] += shape[c.base[j]] * local[j];
       for (unsigned int i = 0; i < n; ++i) {
-        cell_internal[i] += w * shape[c.base[i]] * field[c.component[i]];
-        if (!target.tangent) continue;
+        cell_out[i] += w * shape[c.base[i]] * field[c.component[i]];
+        if (!tangent) continue;
         for (unsigned int j = 0; j < n; ++j)
           if (c.component[j] == c.component[i]) cell_matrix[i * n + j] += gain * w * shape[c.base[i]] * shape[c.base[j]];
       }
     }
-    const int* where = target.tangent ? target.system->cell_scatter(k) : nullptr;
-    for (unsigned int i = 0; i < n; ++i) {
-      if (target.internal) target.internal[indices[i]] += cell_internal[i];
-      if (!constrained[indices[i]]) target.residual[indices[i]] -= cell_internal[i];
-      if (!target.tangent) continue;
+    for (unsigned int i = 0; i < n; ++i) out[indices[i]] += cell_out[i];
+    if (!tangent) continue;
+    const int* where = target->system->cell_scatter(k);
+    for (unsigned int i = 0; i < n; ++i)
       for (unsigned int j = 0; j < n; ++j)
-        if (where[i * n + j] >= 0) target.tangent[where[i * n + j]] += cell_matrix[i * n + j];
-    }
+        if (where[i * n + j] >= 0) target->tangent[where[i * n + j]] += cell_matrix[i * n + j];
+  }
+}
+
+// M (a+ / (1 + alpha_h) + alpha v+) - alpha_h / (1 + alpha_h) Q with the consistent mass into f_int,
+// (c0 / (1 + alpha_h) + alpha dv+/du+) M into the tangent.
+bool InertiaTerm::assemble(const AssemblyState& state, AssemblyTarget& target) {
+  const std::vector<bool>& constrained = target.system->constrained();
+  const Vector<double>& u = state.u;
+  inertial_.reinit(u.size(), /*omit_zeroing_entries=*/true);
+  for (types::global_dof_index i = 0; i < u.size(); ++i) {
+    const double a_new = acceleration(u[i], i);
+    inertial_[i] = mass_scale_ * a_new + dynamics_.rayleigh_mass_per_s * velocity(u[i], a_new, i);
+  }
+  const double gain = mass_scale_ * c0_ + dynamics_.rayleigh_mass_per_s * velocity_gain();
+  Vector<double> internal(u.size());
+  mass_times(inertial_, internal.begin(), gain, &target);
+  if (carried_.size() != 0) internal.add(-dynamics_.hht_alpha * mass_scale_, carried_);
+  for (types::global_dof_index i = 0; i < u.size(); ++i) {
+    if (target.internal) target.internal[i] += internal[i];
+    if (!constrained[i]) target.residual[i] -= internal[i];
   }
   return true;
 }

@@ -5,10 +5,19 @@
 //   Newmark (beta, gamma):  a+ = (u+ - u - dt v)/(beta dt^2) - (1 - 2 beta)/(2 beta) a,
 //                           v+ = v + dt ((1 - gamma) a + gamma a+)      (1/4, 1/2: no dissipation)
 //   backward Euler:         v+ = (u+ - u)/dt,  a+ = (v+ - v)/dt          (first order, dissipative)
+//   HHT-alpha (Hilber, Hughes & Taylor 1977), alpha_h in [-1/3, 0]: Newmark's updates with
+//     beta = (1 - alpha_h)^2 / 4, gamma = (1 - 2 alpha_h) / 2, and the balance taken at t_n+1+alpha_h:
+//       M a+ + (1 + alpha_h) (C v+ + S(u+)) - alpha_h (C v + S(u)) = 0,   S = f_int - f_ext,
+//     second order, dissipating high frequencies (alpha_h = 0 is Newmark's average acceleration).
+//     Divided by (1 + alpha_h) the other terms stay as they are: this one adds M a+ / (1 + alpha_h)
+//     and the constant -alpha_h / (1 + alpha_h) Q, with Q = C v + S(u) of the step's start. At a
+//     converged step the balance gives Q+ = (alpha_h Q - M a+) / (1 + alpha_h), so Q is carried
+//     from the term's own quantities (Q = 0 at rest) and no other term needs to know the scheme.
 // M is the consistent mass matrix of density rho. The state starts at rest.
 //
-// InertiaTerm carries the time-stepping state (u, v, a at the step's start) and adds M (a+ + alpha v+);
-// StiffnessDampingTerm, built only when beta > 0, adds beta K0 v+ and reads that state.
+// InertiaTerm carries the time-stepping state (u, v, a, and Q for HHT, at the step's start) and adds
+// M (a+ / (1 + alpha_h) + alpha v+) (alpha_h = 0 but for HHT); StiffnessDampingTerm, built only when
+// beta > 0, adds beta K0 v+ and reads that state.
 #pragma once
 
 #include <map>
@@ -25,8 +34,11 @@ struct Dynamics {
   double time_step_s = 0.05;
   bool newmark = true;  // false: backward Euler
   double beta = 0.25, gamma = 0.5;
+  double hht_alpha = 0;  // in [-1/3, 0]; with newmark, beta and gamma from it (hht())
   double rayleigh_mass_per_s = 0;   // alpha
   double rayleigh_stiffness_s = 0;  // beta
+  // HHT-alpha's Newmark parameters for alpha_h in [-1/3, 0].
+  static Dynamics hht(double alpha_h);
 };
 
 class InertiaTerm final : public Term {
@@ -46,8 +58,13 @@ class InertiaTerm final : public Term {
  private:
   const Discretisation& d_;
   Dynamics dynamics_;
+  // M x (the consistent mass, this rank's cells) into `out`; with `tangent`, `gain` M into it too.
+  void mass_times(const dealii::Vector<double>& x, double* out, double gain, AssemblyTarget* tangent) const;
+
   double c0_ = 0, c1_ = 0, c2_ = 0;  // a+ = c0 (u+ - u_old) - c1 v_old - c2 a_old
+  double mass_scale_ = 1;            // 1 / (1 + alpha_h)
   dealii::Vector<double> u_old_, v_old_, a_old_;
+  dealii::Vector<double> carried_;   // HHT: Q of the step's start (this rank's part), else empty
   dealii::Vector<double> inertial_;  // a+ + alpha v+ per dof, at the assembled state
   std::vector<double> density_;      // per cell
 };

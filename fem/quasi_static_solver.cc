@@ -48,6 +48,11 @@ QuasiStaticSolver::QuasiStaticSolver(QuasiStaticSolver&&) noexcept = default;
 QuasiStaticSolver& QuasiStaticSolver::operator=(QuasiStaticSolver&&) noexcept = default;
 
 int QuasiStaticSolver::ranks() const { return impl_->d.ranks; }
+std::vector<Discretisation::Piece> QuasiStaticSolver::pieces() {
+  impl_->ensure_set_up();
+  return impl_->d.pieces(impl_->system.constrained());
+}
+
 unsigned int QuasiStaticSolver::dofs() const { return impl_->d.n_dofs(); }
 unsigned int QuasiStaticSolver::cells() const { return impl_->d.n_cells(); }
 
@@ -116,6 +121,8 @@ void QuasiStaticSolver::enable_dynamics(const Dynamics& dynamics) {
     throw std::invalid_argument("dynamics: the time step and the density must be positive");
   if (dynamics.rayleigh_mass_per_s < 0 || dynamics.rayleigh_stiffness_s < 0)
     throw std::invalid_argument("dynamics: Rayleigh damping coefficients must not be negative");
+  if (!(dynamics.hht_alpha >= -1.0 / 3.0 && dynamics.hht_alpha <= 0))
+    throw std::invalid_argument("dynamics: HHT's alpha must lie in [-1/3, 0]");
   Impl& m = *impl_;
   m.inertia = std::make_unique<InertiaTerm>(m.d, dynamics);
   m.damping.reset();

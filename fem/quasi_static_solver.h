@@ -150,6 +150,9 @@ class QuasiStaticSolver {
 
   unsigned int dofs() const;
   unsigned int cells() const;
+  // The body's pieces and the rigid motions its supports leave free on each (Discretisation::pieces):
+  // a piece with a free motion is not held, and a load on it has no equilibrium.
+  std::vector<Discretisation::Piece> pieces();
   // The terms a solve assembles, in order (elasticity always; the others only once asked for).
   std::vector<std::string> terms() const;
 

@@ -161,7 +161,12 @@ void name_boundaries(const config::GeneratedMesh& g, Triangulation<3>& tria) {
           if (std::abs(c[d] - g.size_m[d]) < best) best = std::abs(c[d] - g.size_m[d]), id = 2 * d + 1;
         }
       } else if (g.shape == config::GeneratedShape::shell) {
-        id = c.norm() < 0.5 * (g.inner_radius_m + g.radius_m) ? 0 : 1;
+        // By the face's farthest vertex: the shell's own vertices lie on its spheres, while a
+        // flattened face's centre (and a vertex the conversion to tetrahedra adds there) lies well
+        // inside its sphere on a coarse shell, below the middle radius for a thin one.
+        double farthest = 0;
+        for (const unsigned int v : cell->face(f)->vertex_indices()) farthest = std::max(farthest, cell->face(f)->vertex(v).norm());
+        id = farthest < 0.5 * (g.inner_radius_m + g.radius_m) ? 0 : 1;
       }
       cell->face(f)->set_boundary_id(dealii::types::boundary_id(id));
     }

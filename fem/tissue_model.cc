@@ -4,6 +4,7 @@
 #include <cmath>
 #include <stdexcept>
 
+#include "fem/physical_problem.h"
 #include "fem/tissue_mesh_builder.h"
 
 namespace fetouch::fem {
@@ -28,6 +29,33 @@ bool selects(const config::Selector& s, const dealii::Point<3>& c) {
     case config::SelectorKind::physical_group: return false;
   }
   return false;
+}
+
+// A piece of tissue that its supports leave free to move rigidly has no equilibrium under a probe's
+// force or its weight: the solve fails, or the piece floats away from the probe and the force felt
+// is zero. Said before anything runs, with what to change.
+void require_held(TissueModel& model) {
+  const std::vector<Discretisation::Piece> pieces = model.solver->pieces();
+  model.pieces = static_cast<unsigned int>(pieces.size());
+  std::string problem;
+  for (std::size_t p = 0; p < pieces.size(); ++p) {
+    const std::vector<std::string>& free = pieces[p].free_motions;
+    if (free.empty()) continue;
+    std::string what = pieces.size() == 1 ? "the tissue" : "piece " + std::to_string(p + 1) + " of the " +
+                                                               std::to_string(pieces.size()) + " the mesh falls into (" +
+                                                               std::to_string(pieces[p].cells) + " cells)";
+    if (free.size() == 6) {
+      what += " is not held: no fixed, symmetry or roller boundary region reaches it";
+    } else {
+      what += " is not held against ";
+      for (std::size_t k = 0; k < free.size(); ++k) what += (k == 0 ? "" : k + 1 == free.size() ? " and " : ", ") + free[k];
+    }
+    problem += (problem.empty() ? "" : "; ") + what;
+  }
+  if (problem.empty()) return;
+  throw PhysicalProblem(problem + " (a probe would push it away, so no force could be felt): hold part of its boundary "
+                        "with a `boundary:` region of type fixed (or components that stop those motions)" +
+                        (pieces.size() > 1 ? std::string(", or mesh the tissue as one piece") : std::string()));
 }
 
 }  // namespace
@@ -155,6 +183,7 @@ std::unique_ptr<TissueModel> build_tissue_model(const config::Scene& scene,
   model->newton.force_tolerance_n = scene.solver.accuracy_force_n;
   model->newton.frame_iterations = scene.solver.frame_newton_iterations;
   model->solver->set_compliance_accuracy(scene.solver.accuracy_compliance);
+  require_held(*model);
   return model;
 }
 
@@ -171,8 +200,11 @@ std::optional<QuasiStaticSolver::Dynamics> scene_dynamics(const config::Scene& s
   switch (scene.effects.integrator) {
     case config::TimeIntegrator::newmark: d.newmark = true; break;
     case config::TimeIntegrator::backward_euler: d.newmark = false; break;
-    case config::TimeIntegrator::hht:
-      throw std::runtime_error("time integrator hht is not implemented yet; use newmark or backward_euler");
+    case config::TimeIntegrator::hht: {
+      const Dynamics hht = Dynamics::hht(scene.effects.hht_alpha);
+      d.newmark = true, d.hht_alpha = hht.hht_alpha, d.beta = hht.beta, d.gamma = hht.gamma;
+      break;
+    }
   }
   if (damping) {
     d.rayleigh_mass_per_s = scene.effects.rayleigh_mass_per_s;

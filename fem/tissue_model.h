@@ -31,10 +31,12 @@ struct TissueModel {
   std::map<std::string, unsigned int> region_faces;  // scene boundary region -> faces selected
   NewtonSettings newton;
   int degree = 1;
+  unsigned int pieces = 1;  // the mesh's separate pieces (cells joined through vertices), each held
 };
 
 // Throws std::runtime_error naming the region when a selector selects no face, and at the scene's
-// file and line when `materials` names a region the mesh lacks or leaves a region without one.
+// file and line when `materials` names a region the mesh lacks or leaves a region without one;
+// PhysicalProblem (physical_problem.h) when a piece of the tissue is not held by its supports.
 // `adjust`, if given, changes the triangulation after the scene's boundary regions have their ids
 // and before the solver is built on it (a study's distorted mesh, its own material or boundary ids).
 std::unique_ptr<TissueModel> build_tissue_model(const config::Scene& scene,
@@ -45,8 +47,8 @@ std::unique_ptr<TissueModel> build_tissue_model(const config::Scene& scene,
 long gravity_evaluations();
 
 // The time stepping a scene asks for (effects inertia and damping; one step per solver frame), or
-// nothing for a quasi-static scene. Throws std::runtime_error for what the solver cannot do yet
-// (HHT-alpha), naming it.
+// nothing for a quasi-static scene (Newmark, backward Euler or HHT-alpha, inertia_term.h). Throws
+// std::runtime_error for damping without inertia.
 // `model`: the densities of its regions (the scene's `material` density elsewhere).
 std::optional<QuasiStaticSolver::Dynamics> scene_dynamics(const config::Scene& scene, const TissueModel* model = nullptr);
 

@@ -26,6 +26,7 @@
 #include "app/scene_rig.h"
 #include "app/session.h"
 #include "fem/fem_environment.h"
+#include "fem/physical_problem.h"
 
 namespace fetouch::app {
 
@@ -223,6 +224,7 @@ void write_summary(std::ostream& out, const ReplayOptions& o, const config::Scen
     json.key("haptic_core").value(static_cast<long>(t.haptic_core));
   }
   json.key("newton_failures").value(s.newton_failures);
+  json.key("first_failure").value(s.first_failure);
   json.key("max_force_n").value(s.max_force_n);
   json.key("min_stability_margin").value(s.min_stability_margin);
   json.key("frames_with_unstable_gains").value(s.frames_with_unstable_gains);
@@ -260,6 +262,8 @@ SessionSummary run_session(const config::Scene& scene, const ReplayOptions& o, c
   session.loop = settings;
   session.keep_forces = keep_forces;
   session.probes = rig.probes;
+  // The main session shows its frames and expected end (not the comparison runs, nor under -q).
+  session.progress = out && log::enabled(log::Level::info);
   fem::FemEnvironment& environment = *rig.environment;
   // Under MPI, rank 0 runs the session; the other ranks serve its solves until it is over.
   int rank = 0;
@@ -359,6 +363,10 @@ int run_replay(const ReplayOptions& o) {
     summary = run_session(scene, o, loop_settings(scene), &out, false, &patches);
     session_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - session_start).count();
     if (o.compare_ideal) comparison = compare_with_ideal(scene, o);
+  } catch (const fem::PhysicalProblem& e) {  // a valid scene whose physics cannot do it: the work failed
+    std::cerr << "error: the work failed: " << naming(o.scene, e.what() + physical_advice(scene)) << "\n";
+    if (ranks > 1) MPI_Abort(MPI_COMM_WORLD, kExitFailure);
+    return kExitFailure;
   } catch (const std::exception& e) {
     std::cerr << "error: " << naming(o.scene, e.what()) << "\n";
     // The other ranks may be waiting in a collective call that will never come.
@@ -381,8 +389,9 @@ int run_replay(const ReplayOptions& o) {
     std::printf("%ld ticks (%.2f s simulated), %ld frames in %.1f s; solve p50 %.1f ms, p99 %.1f ms, max %.1f ms\n",
                 summary.ticks, summary.ticks / scene.haptics.rate_hz,
                 summary.frames, session_seconds, 1e3 * summary.solve_p50_s, 1e3 * summary.solve_p99_s, 1e3 * summary.solve_max_s);
-    std::printf("  max force %.3f N, smallest stability margin %.3f, %ld Newton failures\n", summary.max_force_n,
-                summary.min_stability_margin, summary.newton_failures);
+    std::printf("  max force %.3f N, smallest stability margin %.3f, %ld Newton failures%s\n", summary.max_force_n,
+                summary.min_stability_margin, summary.newton_failures,
+                summary.first_failure.empty() ? "" : (" (the first " + summary.first_failure + "; each rolled back, the last good answer held)").c_str());
     if (o.clock == "realtime") {
       const TimingSummary& t = summary.timing;
       const std::string core = t.haptic_core >= 0 ? ", haptic thread alone on core " + std::to_string(t.haptic_core) : "";

@@ -22,9 +22,11 @@
 #include "app/log.h"
 #include "app/output_guard.h"
 #include "app/scene_mesh.h"
+#include "app/scene_rig.h"
 #include "app/mpi_session.h"
 #include "app/pvd.h"
 #include "app/progress.h"
+#include "fem/physical_problem.h"
 #include "fem/tissue_model.h"
 
 namespace fetouch::app {
@@ -191,6 +193,9 @@ int run_solve(const SolveOptions& o) {
       model->solver->set_patch_force(patch, force);
       patches.push_back(patch);
     }
+  } catch (const fem::PhysicalProblem& e) {
+    std::cerr << "error: the work failed: " << o.scene << ": " << e.what() << physical_advice(scene) << "\n";
+    return kExitFailure;
   } catch (const std::exception& e) {
     std::cerr << "error: " << o.scene << ": " << e.what() << "\n";
     return kExitBadInput;
@@ -297,6 +302,10 @@ int run_solve(const SolveOptions& o) {
     std::cerr << "error: " << e.what() << "\n";
     return kExitFailure;
   }
+  // A failed solve is said on standard error too (under --json standard output is the report alone).
+  if (!report.converged)
+    std::cerr << "error: the work failed: " << o.scene << ": the solve did not converge: " << report.failure
+              << physical_advice(scene) << "\n";
   if (o.json) {
     std::cout << json.str();
   } else {

@@ -182,8 +182,11 @@ TEST(HardCases, SliverTetrahedra) {
   expect_sound(solver, report, "slivers (random distortion 0.45)");
 }
 
-// Beyond what the tissue can take: a force that would turn the block inside out. The solve must
-// fail cleanly after its cuts, leave the state at the last converged one, and say why.
+// Beyond what the solver may do in its bounds: 500 N on a 1 cm patch (300 times the tissue's
+// modulus over the patch) with 5 Newton iterations and 2 cuts. Neo-Hookean tissue has an equilibrium
+// under any load (squashed against the table), and with the patch's load resolved on the faces
+// (contact_patches.cc) Newton finds it given its usual bounds; held to these, the solve must fail
+// cleanly, leave the state at the last converged one, and say why.
 TEST(HardCases, ImpossibleLoadFailsCleanlyAndRollsBack) {
   const NeoHookean tissue(lame_lambda(5000, 0.45), lame_mu(5000, 0.45));
   dealii::Triangulation<3> tria;
@@ -196,10 +199,11 @@ TEST(HardCases, ImpossibleLoadFailsCleanlyAndRollsBack) {
   const double before = solver.patch_displacement(probe)[2];
   solver.set_patch_force(probe, along(2, -500));
   NewtonSettings settings;
-  settings.max_cuts = 4;
+  settings.max_cuts = 2;
+  settings.max_iterations = 5;
   const SolveReport report = solver.solve(settings);
   EXPECT_FALSE(report.converged);
-  expect_sound(solver, report, "500 N on a 1 cm patch");
+  expect_sound(solver, report, "500 N on a 1 cm patch, 5 iterations");
   EXPECT_EQ(solver.patch_displacement(probe)[2], before);  // rolled back to the last good frame
 }
 

@@ -27,13 +27,15 @@ TEST(SceneDynamics, InertiaAndMassDampingMapToTheSolver) {
                    0.01);
 }
 
-TEST(SceneDynamics, WhatTheSolverCannotDoIsRefusedByName) {
-  try {
-    scene_dynamics(scene_with("  - inertia: {integrator: hht}\n"));
-    FAIL() << "hht accepted";
-  } catch (const std::runtime_error& e) {
-    EXPECT_NE(std::string(e.what()).find("hht"), std::string::npos);
-  }
+// HHT-alpha: Newmark's parameters from alpha (beta = (1 - alpha)^2 / 4, gamma = 1/2 - alpha).
+TEST(SceneDynamics, HhtTakesNewmarksParametersFromItsAlpha) {
+  const auto d = scene_dynamics(scene_with("  - inertia: {integrator: hht, hht_alpha: -0.3}\n"));
+  ASSERT_TRUE(d.has_value());
+  EXPECT_TRUE(d->newmark);
+  EXPECT_DOUBLE_EQ(d->hht_alpha, -0.3);
+  EXPECT_DOUBLE_EQ(d->beta, 1.3 * 1.3 / 4);
+  EXPECT_DOUBLE_EQ(d->gamma, 0.8);
+  EXPECT_DOUBLE_EQ(scene_dynamics(scene_with("  - inertia: {integrator: hht}\n"))->hht_alpha, -0.1);  // the documented default
 }
 
 }  // namespace

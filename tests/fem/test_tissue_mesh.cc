@@ -97,6 +97,29 @@ TEST(GeneratedShell, InnerAndOuterSurfacesAreNamed) {
   EXPECT_NEAR(outer / inner, 25.0 / 9.0, 1e-9);
 }
 
+// A thin or coarse shell (the random scenes found it): a flattened face's centre lies well inside its
+// sphere, below the middle radius for a shell thinner than about a third of its radius. The two
+// surfaces are still similar polyhedra: areas in the ratio (R / r)^2 exactly, for every element.
+TEST(GeneratedShell, ThinCoarseShellsNameTheirSurfacesToo) {
+  for (const ElementType element : {ElementType::p1, ElementType::q1})
+    for (const int refinements : {0, 1, 2})
+      for (const double inner_radius : {0.02, 0.03, 0.04, 0.045}) {
+        config::MeshSpec spec;
+        spec.source = config::MeshSource::generated;
+        spec.element = element;
+        spec.generated.shape = GeneratedShape::shell;
+        spec.generated.radius_m = 0.05;
+        spec.generated.inner_radius_m = inner_radius;
+        spec.generated.refinements = refinements;
+        dealii::Triangulation<3> tria;
+        const auto info = build_tissue_mesh(spec, tria);
+        const double inner = boundary_area(tria, info.boundary_ids.at("inner"));
+        const double outer = boundary_area(tria, info.boundary_ids.at("outer"));
+        const double ratio = 0.05 / inner_radius;
+        EXPECT_NEAR(outer / inner, ratio * ratio, 1e-9) << config::to_string(element) << " r" << refinements << " inner " << inner_radius;
+      }
+}
+
 TEST(GmshFile, HandWrittenUnitCube) {
   config::MeshSpec spec;
   spec.source = config::MeshSource::file;
