@@ -1,6 +1,7 @@
 #include "fem/contact_patches.h"
 
 #include <deal.II/fe/fe_values.h>
+#include <deal.II/base/quadrature_lib.h>
 #include <deal.II/fe/fe_values_extractors.h>
 
 #include <algorithm>
@@ -17,11 +18,12 @@ namespace {
 
 // A face larger than the patch would put few or none of its quadrature points under the kernel (a
 // 1 mm probe on 50 mm faces: none, and no patch). Such a face is integrated on its subdivision into
-// m x m similar pieces, m = ceil(face diameter / radius), each with the face's own rule mapped
-// into it: the kernel is then sampled at spacings no coarser than on a face of the radius's size,
-// whatever the mesh, and the integral (hence H, the force's distribution and W) converges with the
-// mesh as on fine faces. A face no larger than the radius keeps its rule (m = 1).
-constexpr unsigned int kMaxSubdivisions = 128;
+// m x m similar pieces, m = ceil(face diameter / radius), each with a low-order rule (2 x 2 Gauss
+// points on a quadrilateral, 3 on a triangle: the kernel is smooth on a piece no larger than the
+// radius) mapped into it: the kernel is then sampled at spacings no coarser than on a face of the
+// radius's size, whatever the mesh, and the integral (hence H, the force's distribution and W)
+// converges with the mesh as on fine faces. A face no larger than the radius keeps its rule (m = 1).
+constexpr unsigned int kMaxSubdivisions = 64;
 
 unsigned int face_subdivisions(double face_diameter, double radius) {
   const double m = std::ceil(face_diameter / radius);
@@ -56,43 +58,54 @@ Quadrature<2> subdivided(const Quadrature<2>& base, bool triangle, unsigned int 
   return Quadrature<2>(points, weights);
 }
 
+}  // namespace
+
+// The face values of a subdivision and flags, built once (their set-up, every face orientation
+// of every face of the reference cell, costs far more than a reinit).
+FEFaceValues<3>& ContactPatchesTerm::face_values(unsigned int m, UpdateFlags flags) const {
+  std::unique_ptr<FEFaceValues<3>>& values = face_values_[{m, static_cast<unsigned int>(flags)}];
+  if (!values) {
+    const Quadrature<2> rule = m == 1 ? *d_.face_quadrature
+                                      : subdivided(d_.simplex ? Quadrature<2>(QGaussSimplex<2>(2)) : Quadrature<2>(QGauss<2>(2)),
+                                                   d_.simplex, m);
+    values = std::make_unique<FEFaceValues<3>>(*d_.mapping, *d_.fe, rule, flags);
+  }
+  return *values;
+}
+
 // Calls visit(cell, face_values, q, w, first) at every boundary quadrature point within a patch's
 // radius: w = (1 - (d/r)^2)^2 JxW is the unnormalised kernel weight, `first` marks the first point
 // visited on a face (to evaluate per-face data once); face_values carries `flags`.
 template <class Visit>
-void for_each_patch_point(const Discretisation& d, const ContactPatchesTerm::Patch& p, UpdateFlags flags, Visit visit) {
+void ContactPatchesTerm::for_each_patch_point(const Patch& p, UpdateFlags flags, Visit visit) const {
   flags = flags | update_JxW_values | update_quadrature_points;
-  std::map<unsigned int, std::unique_ptr<FEFaceValues<3>>> by_subdivision;  // built as faces need them
-  for (const auto& cell : d.dof.active_cell_iterators())
+  for (const auto& cell : d_.dof.active_cell_iterators())
     for (const unsigned int f : cell->face_indices()) {
       if (!cell->face(f)->at_boundary()) continue;
       // Skip faces that are entirely out of reach (a cheap bound through the face's diameter).
       const double diameter = cell->face(f)->diameter();
       if (cell->face(f)->center().distance(p.center) > p.radius + diameter) continue;
-      const unsigned int m = face_subdivisions(diameter, p.radius);
-      std::unique_ptr<FEFaceValues<3>>& face_values = by_subdivision[m];
-      if (!face_values)
-        face_values = std::make_unique<FEFaceValues<3>>(
-            *d.mapping, *d.fe, m == 1 ? *d.face_quadrature : subdivided(*d.face_quadrature, d.simplex, m), flags);
-      face_values->reinit(cell, f);
+      FEFaceValues<3>& values = face_values(face_subdivisions(diameter, p.radius), flags);
+      values.reinit(cell, f);
       bool first = true;
-      for (unsigned int q = 0; q < face_values->n_quadrature_points; ++q) {
-        const double r = face_values->quadrature_point(q).distance(p.center) / p.radius;
+      for (unsigned int q = 0; q < values.n_quadrature_points; ++q) {
+        const double r = values.quadrature_point(q).distance(p.center) / p.radius;
         if (r >= 1) continue;
-        visit(cell, *face_values, q, (1 - r * r) * (1 - r * r) * face_values->JxW(q), first);
+        visit(cell, values, q, (1 - r * r) * (1 - r * r) * values.JxW(q), first);
         first = false;
       }
     }
 }
 
-}  // namespace
+ContactPatchesTerm::ContactPatchesTerm(const Discretisation& discretisation) : d_(discretisation) {}
+ContactPatchesTerm::~ContactPatchesTerm() = default;
 
 void ContactPatchesTerm::build(Patch& p) const {
   const unsigned int n = d_.fe->n_dofs_per_cell();
   std::vector<types::global_dof_index> indices(n);
   for (Vector<double>& row : p.h) row.reinit(d_.n_dofs());
   double total = 0;
-  for_each_patch_point(d_, p, update_values,
+  for_each_patch_point(p, update_values,
                        [&](const auto& cell, const FEFaceValues<3>& values, unsigned int q, double w, bool first) {
                          total += w;
                          if (first) cell->get_dof_indices(indices);
@@ -158,7 +171,7 @@ Tensor<1, 3> ContactPatchesTerm::deformed_normal(int patch, const Vector<double>
   const FEValuesExtractors::Vector displacement(0);
   std::vector<Tensor<2, 3>> grad_u;
   Tensor<1, 3> sum;
-  for_each_patch_point(d_, p, update_gradients | update_normal_vectors,
+  for_each_patch_point(p, update_gradients | update_normal_vectors,
                        [&](const auto&, const FEFaceValues<3>& values, unsigned int q, double w, bool first) {
                          if (first) {
                            grad_u.resize(values.n_quadrature_points);

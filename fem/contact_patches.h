@@ -8,18 +8,28 @@
 
 #include <deal.II/base/point.h>
 #include <deal.II/base/tensor.h>
+#include <deal.II/fe/fe_update_flags.h>
 
 #include <array>
+#include <map>
+#include <memory>
+#include <utility>
 #include <vector>
 
 #include "fem/discretisation.h"
 #include "fem/term.h"
 
+namespace dealii {
+template <int dim, int spacedim>
+class FEFaceValues;
+}
+
 namespace fetouch::fem {
 
 class ContactPatchesTerm final : public Term {
  public:
-  explicit ContactPatchesTerm(const Discretisation& discretisation) : d_(discretisation) {}
+  explicit ContactPatchesTerm(const Discretisation& discretisation);
+  ~ContactPatchesTerm() override;
   const char* name() const override { return "contact"; }
   bool assemble(const AssemblyState& state, AssemblyTarget& target) override;
   void accept(const dealii::Vector<double>& u) override;
@@ -44,8 +54,13 @@ class ContactPatchesTerm final : public Term {
 
  private:
   void build(Patch& p) const;
+  dealii::FEFaceValues<3, 3>& face_values(unsigned int subdivisions, dealii::UpdateFlags flags) const;
+  template <class Visit>
+  void for_each_patch_point(const Patch& p, dealii::UpdateFlags flags, Visit visit) const;
+
   const Discretisation& d_;
   std::vector<Patch> patches_;
+  mutable std::map<std::pair<unsigned int, unsigned int>, std::unique_ptr<dealii::FEFaceValues<3, 3>>> face_values_;
 };
 
 }  // namespace fetouch::fem
