@@ -374,6 +374,10 @@ int run_replay(const ReplayOptions& o) {
     return kExitBadInput;
   }
   if (rank != 0) return kExitOk;
+  // Not an error (a probe may hover), but never silent: a replay that felt nothing says so.
+  if (summary.max_force_n == 0)
+    log::warning() << o.scene << ": no probe touched the tissue (the largest force was 0 N): each trajectory stays "
+                   << "outside the tissue's deformed surface (check its start and depth against the mesh, or the sag under gravity)";
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   std::ostringstream text;
   write_summary(text, o, scene, summary, patches, recording, session_seconds, seconds, comparison);

@@ -43,9 +43,13 @@ struct HardCasesOptions : StudyOptions {
   // line search, and no load-step cuts.
   bool no_line_search = false;
   int max_cuts = -1;  // < 0: the battery's own (8)
+  int random = 0;     // > 0: this many valid scenes drawn from the schema instead (random_study.cc)
+  unsigned int seed = 1;
 };
 // Exit 0 only when every case is sound.
 int run_study_hard_cases(const HardCasesOptions& options);
+// --random N: exit 0 only when every drawn scene ran to its end or failed with a physical reason.
+int run_study_random(const HardCasesOptions& options);
 
 // Refuses an --out that would replace the scene, its mesh or a trajectory; creates the folder.
 // Throws std::invalid_argument naming both.

@@ -112,7 +112,20 @@ void add_study_command(CLI::App& parent, int& exit_code) {
   hard->add_flag("--no-line-search", h->no_line_search, "Break the solver on purpose: Newton takes every full step");
   hard->add_option("--max-cuts", h->max_cuts, "Load-step cuts allowed per solve (default 8; 0 breaks the hard cases)")
       ->check(CLI::Range(0, 20));
-  hard->callback([h, &exit_code]() { exit_code = guarded(*h, [h]() { return run_study_hard_cases(*h); }); });
+  hard->add_option("--random", h->random,
+                   "Instead: replay N valid scenes drawn from the schema (every enum value in turn, numbers at their\n"
+                   "range's edges), each by `fetouch replay` in a process of its own, bounded in time; each must run\n"
+                   "to its end or fail with exit 1 and a physical reason (OUT/scenes/NAME/scene.yaml to rerun one)")
+      ->check(CLI::Range(1, 100000));
+  hard->add_option("--seed", h->seed, "The draw's seed (with --random)")->capture_default_str();
+  hard->callback([h, &exit_code]() {
+    if (h->random > 0 && !h->scene.empty()) {
+      std::cerr << "error: --random draws its own scenes: give no scene\n";
+      exit_code = kExitBadInput;
+      return;
+    }
+    exit_code = guarded(*h, [h]() { return h->random > 0 ? run_study_random(*h) : run_study_hard_cases(*h); });
+  });
 }
 
 }  // namespace fetouch::app
