@@ -40,7 +40,7 @@ void FemEnvironment::describe(haptics::EnvironmentUpdate& out) {
 void FemEnvironment::initial(haptics::EnvironmentUpdate& out) {
   const SolveReport report = solver_->solve(newton_);
   if (!report.converged)
-    throw PhysicalProblem("the tissue finds no rest state under its supports and static loads (its weight, tractions) "
+    throw PhysicalProblem("the tissue finds no rest state under its supports and static loads (its weight, tractions, a cavity's pressure) "
                           "before any probe touches it: " + report.failure);
   describe(out);
   out.status = {};
@@ -123,7 +123,11 @@ void FemEnvironment::solve(const std::vector<haptics::ContactSample>& samples, l
   if (trace) {
     std::string residuals;
     for (const StepReport& step : report.steps)
-      for (const double r : step.residuals) residuals += (residuals.empty() ? "" : " ") + std::to_string(r);
+      for (const double r : step.residuals) {
+        char text[24];
+        std::snprintf(text, sizeof text, "%.3g", r);  // residuals span 1e-14 to 1e3 N
+        residuals += (residuals.empty() ? "" : " ") + std::string(text);
+      }
     std::fprintf(stderr, "frame %ld: %.1f ms; %s; patch moves %ld; residuals %s\n", frame, 1e3 * out.status.seconds,
                  describe_frame(report, solver_->last_compliance_times()).c_str(), patch_moves_, residuals.c_str());
   }

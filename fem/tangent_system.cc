@@ -195,6 +195,7 @@ void TangentSystem::finish(const std::vector<bool>& constrained) {
   for (int i = 0; i < n; ++i)
     if (!constrained[i]) sum += std::abs(values_[diagonal_[i]]), ++free;
   const double scale = free > 0 && sum > 0 ? sum / free : 1.0;
+  diagonal_scale_ = scale;
   for (int i = 0; i < n; ++i)
     if (constrained[i]) values_[diagonal_[i]] = scale;
   if (!direct_cholmod_) push_values();

@@ -65,8 +65,10 @@ class TangentSystem {
   void add(int row, int column, double value) { values_[position(row, column)] += value; }
   int position(int row, int column) const;
   double* values() { return values_.data(); }
-  // Constrained rows and columns become diagonal (the caller skipped their entries).
+  // Constrained rows and columns become diagonal (the caller skipped their entries), with the free
+  // diagonal's mean magnitude, which diagonal_scale() then gives (N/m: a stiffness per dof).
   void finish(const std::vector<bool>& constrained);
+  double diagonal_scale() const { return diagonal_scale_; }
 
   // y = K x; or y = A x for another value array A of the same pattern.
   void multiply(const double* x, double* y) const { multiply(values_.data(), x, y); }
@@ -133,6 +135,7 @@ class TangentSystem {
   MPI_Comm comm_;
   int ranks_ = 1;
   Method method_ = Method::factorisation;
+  double diagonal_scale_ = 0;
   int owned_begin_ = 0, owned_end_ = 0;
   int baseline_iterations_ = -1;  // of the first CG solve after a set-up
   std::vector<int> local_row_start_;  // the owned rows' offsets, from 0 (parallel)
