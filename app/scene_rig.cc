@@ -1,5 +1,6 @@
 #include "app/scene_rig.h"
 
+#include <cstdio>
 #include <stdexcept>
 #include <utility>
 
@@ -51,6 +52,19 @@ std::string physical_advice(const config::Scene& scene) {
   for (const auto& region : scene.materials) svk = svk || region.material.model == config::MaterialModel::saint_venant_kirchhoff;
   bool loaded = scene.effects.has(config::Effect::gravity);
   for (const config::BoundaryRegion& region : scene.boundary) loaded = loaded || region.type == config::BoundaryType::traction;
+  if (scene.effects.has(config::Effect::cavity) && scene.effects.cavity_law == config::PressureVolumeLaw::isothermal_gas &&
+      scene.effects.cavity_initial_pressure_pa > 0) {
+    double modulus = scene.material.youngs_modulus_pa;
+    if (scene.material.model == config::MaterialModel::mooney_rivlin)
+      modulus = 6 * (scene.material.c10_pa + scene.material.c01_pa);
+    char text[320];
+    std::snprintf(text, sizeof text,
+                  "; the cavity's gas starts at %.4g Pa and inflates a wall of modulus %.4g Pa: an elastic shell has a "
+                  "largest pressure it can hold (an inflation limit point, of the order of its modulus times its "
+                  "thickness over its radius), past which it has no rest state: a lower initial pressure or a stiffer wall",
+                  scene.effects.cavity_initial_pressure_pa, modulus);
+    return text;
+  }
   if (svk && loaded)
     return "; Saint Venant-Kirchhoff softens in compression (a fibre's stress peaks when it is compressed by 42 %, "
            "stretch 1/sqrt(3), and falls after), so a soft block collapses under its own weight or a traction: use "

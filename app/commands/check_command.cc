@@ -17,11 +17,14 @@
 #include "app/exit_codes.h"
 #include "app/json_writer.h"
 #include "app/log.h"
+#include "app/mpi_session.h"
 #include "app/progress.h"
 #include "app/recording.h"
 #include "app/scene_mesh.h"
 #include "config/scene_loader.h"
+#include "fem/physical_problem.h"
 #include "fem/tissue_mesh.h"
+#include "fem/tissue_model.h"
 #include "imaging/volume_info.h"
 #include "meshes/mesh_summary.h"
 
@@ -116,6 +119,21 @@ void check_referenced_data(SceneReport& report) {
       }
     for (const config::Diagnostic& d : report.regions.problems)
       report.errors.push_back(diagnostic_at(report.file, {d.line, d.column}, d.key, d.message));
+    if (!report.errors.empty()) return;
+    // The tissue as a session builds it: its boundary selectors select faces, and its supports hold
+    // every piece (fem::PhysicalProblem otherwise, which a replay would fail on with exit 1).
+    log::detail() << "building the tissue model";
+    config::Scene built = scene;
+    built.mesh = spec;
+    ensure_mpi();
+    try {
+      fem::build_tissue_model(built);
+    } catch (const fem::PhysicalProblem& e) {
+      report.errors.push_back(diagnostic_at(report.file, scene.mesh.where, "boundary",
+                                            std::string("a session would fail: ") + e.what()));
+    } catch (const std::exception& e) {
+      report.errors.push_back(diagnostic_at(report.file, scene.mesh.where, "mesh", e.what()));
+    }
   };
   try {
     if (mesh.source == config::MeshSource::volume) report.volume = imaging::read_volume_info(mesh.path);

@@ -156,8 +156,13 @@ int run_study_random(const HardCasesOptions& o) {
     // Bounded: P1 replays are expected within 10x their simulated time on one core (the report
     // counts those over it); a replay is stopped at 30x (100x for the others), at least 60 s.
     c.limit_s = std::max(60.0, (c.scene.p1 ? 30 : 100) * c.scene.duration_s);
-    c.run = run_bounded({self.string(), "-q", "replay", c.file.string(), "--out", (dir / "run").string(), "--mesh-every", "0"},
-                        dir / "stdout.txt", dir / "stderr.txt", c.limit_s);
+    try {
+      c.run = run_bounded({self.string(), "-q", "replay", c.file.string(), "--out", (dir / "run").string(), "--mesh-every", "0"},
+                          dir / "stdout.txt", dir / "stderr.txt", c.limit_s);
+    } catch (const std::exception& e) {  // the replay could not start: this scene's defect, the others still run
+      c.run.exit_code = 127;
+      std::ofstream(dir / "stderr.txt") << "error: " << e.what() << "\n";
+    }
     fs::create_directories(dir / "run");
     fs::copy_file(dir / "stderr.txt", dir / "run" / "stderr.txt", fs::copy_options::overwrite_existing, error);
     c = judge(std::move(c), dir / "run");

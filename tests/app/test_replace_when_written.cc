@@ -49,5 +49,24 @@ TEST(ReplaceWhenWritten, AFailedWriteLeavesTheEarlierFile) {
   fs::remove_all(dir);
 }
 
+// A writer knows only the temporary file it fills: its error names the file the user gave (it named
+// ".out.writing24961.png", issue 41).
+TEST(ReplaceWhenWritten, AWritersErrorNamesThePathGivenNotTheTemporaryFile) {
+  const fs::path dir = fs::temp_directory_path() / ("fetouch_replace_name_" + std::to_string(::getpid()));
+  fs::create_directories(dir);
+  const fs::path file = dir / "out.png";
+  try {
+    replace_when_written(file, [](const fs::path& temporary) {
+      throw std::runtime_error("vtkPNGWriter: cannot write " + temporary.string() + " (no space)");
+    });
+    FAIL() << "the writer's error was lost";
+  } catch (const std::runtime_error& e) {
+    const std::string what = e.what();
+    EXPECT_EQ(what, "vtkPNGWriter: cannot write " + file.string() + " (no space)");
+  }
+  EXPECT_TRUE(fs::is_empty(dir));  // nothing left behind
+  fs::remove_all(dir);
+}
+
 }  // namespace
 }  // namespace fetouch::app
