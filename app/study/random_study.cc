@@ -120,14 +120,19 @@ Outcome judge(Outcome o, const fs::path& run_dir) {
     o.verdict = "DEFECT", o.reason = "did not end within " + format_number(o.limit_s) + " s";
   } else if (o.run.exit_code == 0) {
     o.max_force_n = json_number(summary, "max_force_n");
-    o.unstable_frames = static_cast<long>(json_number(summary, "frames_with_unstable_gains"));
-    o.newton_failures = static_cast<long>(json_number(summary, "newton_failures"));
-    o.frames = static_cast<long>(json_number(summary, "frames"));
+    const auto count = [&summary](const char* key) {  // -1 where the summary lacks it
+      const double value = json_number(summary, key);
+      return std::isfinite(value) ? static_cast<long>(value) : -1L;
+    };
+    o.unstable_frames = count("frames_with_unstable_gains");
+    o.newton_failures = count("newton_failures");
+    o.frames = count("frames");
     o.verdict = "ran";
     if (!(std::isfinite(o.max_force_n) && o.max_force_n <= o.clamp_n * (1 + 1e-9)))
       o.verdict = "DEFECT", o.reason = "a force of " + format_number(o.max_force_n) + " N against a clamp of " + format_number(o.clamp_n) + " N";
-    else if (o.unstable_frames != 0)
-      o.verdict = "DEFECT", o.reason = std::to_string(o.unstable_frames) + " frames with unstable gains";
+    else if (o.unstable_frames != 0 || o.frames < 0)
+      o.verdict = "DEFECT", o.reason = o.frames < 0 ? "no readable summary.json"
+                                                    : std::to_string(o.unstable_frames) + " frames with unstable gains";
   } else if (o.run.exit_code == 1 && err.find("error: the work failed") != std::string::npos) {
     o.verdict = "failed", o.reason = error_line(err);
   } else {
