@@ -16,6 +16,7 @@
 #include "config/scene_loader.h"
 #include "imaging/phantom.h"
 #include "imaging/volume_io.h"
+#include "app/mesh_pipeline.h"
 #include "meshes/mesh_regions.h"
 
 namespace fetouch::app {
@@ -26,7 +27,8 @@ namespace {
 
 // The mesher's revision: raised whenever the same volume and options give a different mesh (2: the
 // boundary moved out to the segmented volume, regions by their labels' cover; 3: CGAL's restricted
-// Delaunay surface filled by HXT first), so that a mesh cached by an older Fetouch is made again.
+// Delaunay surface filled by HXT first), so that a mesh cached by an older Fetouch is made again. The
+// conforming mesher is a surface of its own in the key, and per-region sizes are added only when given.
 constexpr int kMesherRevision = 3;
 
 // What decides the mesh: the mesher's revision, the volume (path, size, modification time) and
@@ -52,6 +54,7 @@ std::string cache_key(const config::MeshSpec& spec) {
   key << '|' << m.target_size_m << '|' << m.fetus << '|' << (m.threshold ? *m.threshold : -1.0) << '|'
       << static_cast<int>(m.smoothing) << '|' << m.smoothing_sigma_m << '|' << m.closing_voxels << '|'
       << static_cast<int>(m.surface) << '|';
+  for (const auto& [name, size] : m.sizes_m) key << name << ':' << size << ',';
   for (int l : m.labels) key << l << ',';
   for (const auto& [name, labels] : m.regions) {
     key << '|' << name << '=';
@@ -83,32 +86,16 @@ void mesh_into(const config::MeshSpec& spec, const fs::path& file) {
     log::info() << "meshing the scene's volume " << spec.path.string() << " (once; cached as " << file.string() << ")";
     volume = imaging::read_volume(spec.path);
   }
-  imaging::TissueSegmentation segmentation;
-  segmentation.labels = m.labels, segmentation.fetus = m.fetus, segmentation.closing = m.closing_voxels;
-  segmentation.smoothing_mm = m.smoothing_sigma_m * 1e3;
-  if (m.threshold) segmentation.threshold = static_cast<float>(*m.threshold);
-  segmentation.smoothing = m.smoothing == config::SmoothingFilter::none     ? imaging::TissueSegmentation::Smoothing::none
-                           : m.smoothing == config::SmoothingFilter::median ? imaging::TissueSegmentation::Smoothing::median
-                                                                            : imaging::TissueSegmentation::Smoothing::gaussian;
-  const imaging::Mask mask = imaging::segment_tissue(volume, segmentation);
-  const meshes::MaskVolume input = mask_volume(mask);
-  meshes::MeshingSettings settings;
-  settings.element_size_mm = m.target_size_m * 1e3;
-  settings.restricted_surface = m.surface == config::MeshSurface::restricted;
-  if (m.refine_center_m) {
-    for (int d = 0; d < 3; ++d) settings.refine_center_mm[d] = (*m.refine_center_m)[d] * 1e3;
-    settings.refine_radius_mm = m.refine_radius_m * 1e3, settings.refine_size_mm = m.refine_size_m * 1e3;
-  }
-  settings.progress = [](const std::string& step, double) { log::detail() << "meshing: " << step; };
-  meshes::VolumeMesh mesh = meshes::mesh_mask(input, settings);
-  if (!m.regions.empty()) {  // each element in the region of the label map covering most of it
-    std::vector<meshes::MeshRegion> regions;
-    for (const auto& [name, labels] : m.regions) regions.push_back({name, labels});
-    meshes::assign_regions(mesh, label_map(volume), regions);
-    for (const auto& r : mesh.regions)
-      log::info() << "region " << r.name << ": " << r.tetrahedra << " tetrahedra, volume " << 100 * (r.volume_m3 / r.voxel_volume_m3 - 1)
-                  << " % off its voxels', smallest dihedral angle " << r.min_dihedral_deg << " deg";
-  }
+  MeshRequest request = mesh_request(m);
+  request.settings.progress = [](const std::string& step, double) { log::detail() << "meshing: " << step; };
+  meshes::VolumeMesh mesh = mesh_volume(volume, request).mesh;
+  for (const auto& r : mesh.regions)
+    log::info() << "region " << r.name << ": " << r.tetrahedra << " tetrahedra, volume " << 100 * (r.volume_m3 / r.voxel_volume_m3 - 1)
+                << " % off its voxels', smallest dihedral angle " << r.min_dihedral_deg << " deg";
+  for (const auto& f : mesh.surfaces)
+    log::detail() << "surface " << f.name << ": " << f.triangles << " triangles, neighbours' normals " << f.median_angle_deg
+                  << " deg (median), " << f.p99_angle_deg << " deg (99th percentile); within " << f.max_distance_mm
+                  << " mm of its label boundary";
   if (mesh.quality.inverted + mesh.quality.degenerate > 0 || !mesh.closed_manifold)
     throw std::runtime_error("the mesh has inverted or degenerate elements or an open boundary");
   fs::create_directories(file.parent_path());

@@ -31,7 +31,9 @@ enum class SmoothingFilter { none, gaussian, median };
 // How the segmentation's surface is made before it is filled (docs/meshing.md): CGAL's restricted
 // Delaunay surface, or the surface contoured by VTK and remeshed by Gmsh (the mesher before
 // revision 3; the anatomy scenes keep it: their figures were measured on it).
-enum class MeshSurface { restricted, contoured };
+// Or (`conforming`, label maps in regions only) every region a subdomain of one CGAL Delaunay mesh,
+// its interfaces surfaces of their own (meshes/labeled_mesher.h).
+enum class MeshSurface { restricted, contoured, conforming };
 
 // Options for turning an ultrasound volume into a mesh (imaging + meshes pipeline, the same as
 // `fetouch mesh`): one of three segmentations (labels of a label map, the fetal pipeline, or
@@ -47,6 +49,8 @@ struct MeshingOptions {
   double smoothing_sigma_m = 1e-3;  // gaussian only
   int closing_voxels = 2;
   MeshSurface surface = MeshSurface::restricted;
+  // Per region element sizes (`conforming` only): region name and size; the others take target_size_m.
+  std::vector<std::pair<std::string, double>> sizes_m;
   // Finer elements near a point (absent: none).
   std::optional<Vec3> refine_center_m;
   double refine_radius_m = 0, refine_size_m = 0;

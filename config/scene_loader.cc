@@ -53,7 +53,9 @@ const Choices<ElementType> kElements{
 const Choices<GeneratedShape> kShapes{{"box", GeneratedShape::box},
                                       {"ball", GeneratedShape::ball},
                                       {"shell", GeneratedShape::shell}};
-const Choices<MeshSurface> kSurfaces{{"restricted", MeshSurface::restricted}, {"contoured", MeshSurface::contoured}};
+const Choices<MeshSurface> kSurfaces{{"restricted", MeshSurface::restricted},
+                                     {"contoured", MeshSurface::contoured},
+                                     {"conforming", MeshSurface::conforming}};
 const Choices<SmoothingFilter> kFilters{{"none", SmoothingFilter::none},
                                         {"gaussian", SmoothingFilter::gaussian},
                                         {"median", SmoothingFilter::median}};
@@ -106,7 +108,7 @@ void read_meshing(MapView& parent, MeshingOptions& out) {
   const Entry e = parent.entry("meshing");
   MapView map(parent.reader(), e.value, e.path, e.key_mark,
               {"target_size_m", "labels", "regions", "fetus", "threshold", "smoothing", "smoothing_sigma_m",
-               "closing_voxels", "refine", "surface"});
+               "closing_voxels", "refine", "surface", "sizes"});
   if (!map.valid()) return;
   map.number("target_size_m", out.target_size_m, plausible::element_size_m);
   if (map.has("threshold")) {
@@ -167,6 +169,32 @@ void read_meshing(MapView& parent, MeshingOptions& out) {
   map.number("smoothing_sigma_m", out.smoothing_sigma_m, plausible::smoothing_sigma_m);
   map.integer("closing_voxels", out.closing_voxels, {0, 10});
   map.choice("surface", out.surface, kSurfaces);
+  if (out.surface == MeshSurface::conforming && out.regions.empty() && map.has("surface"))
+    map.reader().error(map.entry("surface").value_mark, map.child_path("surface"),
+                       "`conforming` meshes a label map in regions: give meshing.regions (e.g. {wall: [1], fluid: [2]})");
+  if (map.has("sizes")) {  // region: size (m)
+    const Entry sizes = map.entry("sizes");
+    std::vector<std::string> names;
+    if (sizes.value.IsMap())
+      for (auto it = sizes.value.begin(); it != sizes.value.end(); ++it)
+        if (it->first.IsScalar()) names.push_back(it->first.Scalar());
+    if (names.empty()) {
+      map.reader().error(sizes.value_mark, sizes.path, "expected region names with element sizes, such as {body: 0.003, wall: 0.006}");
+    } else if (out.surface != MeshSurface::conforming) {
+      map.reader().error(sizes.key_mark, sizes.path, "per-region sizes need `surface: conforming` (the other meshers make one size)");
+    } else {
+      MapView named(map.reader(), sizes.value, sizes.path, sizes.key_mark, names);
+      for (const std::string& name : names) {
+        if (std::none_of(out.regions.begin(), out.regions.end(), [&](const auto& r) { return r.first == name; })) {
+          named.reader().error(named.entry(name).key_mark, named.child_path(name),
+                               "no region '" + name + "' in meshing.regions");
+          continue;
+        }
+        double size = 0;
+        if (named.number(name, size, plausible::element_size_m, Need::required)) out.sizes_m.emplace_back(name, size);
+      }
+    }
+  }
   if (map.has("refine")) {
     const Entry r = map.entry("refine");
     MapView refine(map.reader(), r.value, r.path, r.key_mark, {"center_m", "radius_m", "size_m"});

@@ -179,6 +179,17 @@ void assign_regions(VolumeMesh& mesh, const MaskVolume& labels, const std::vecto
     handed[c.t] = 1;
   }
 
+  report_regions(mesh, labels, regions);
+}
+
+void report_regions(VolumeMesh& mesh, const MaskVolume& labels, const std::vector<MeshRegion>& regions) {
+  const std::size_t n = regions.size();
+  std::array<int, 256> region_of_label;
+  region_of_label.fill(-1);
+  for (std::size_t r = 0; r < n; ++r)
+    for (const int label : regions[r].labels) region_of_label[std::size_t(label)] = static_cast<int>(r);
+  mesh.region_names.clear();
+  for (const auto& r : regions) mesh.region_names.push_back(r.name);
   // The report: elements, volume against the voxels', quality; outer and interface faces.
   mesh.regions.assign(n, {});
   const double voxel_m3 = labels.spacing_mm[0] * labels.spacing_mm[1] * labels.spacing_mm[2] * 1e-9;
@@ -195,7 +206,7 @@ void assign_regions(VolumeMesh& mesh, const MaskVolume& labels, const std::vecto
     VolumeMesh::RegionReport& report = mesh.regions[std::size_t(mesh.region[t])];
     ++report.tetrahedra;
     const auto& p = mesh.nodes_m;
-    report.volume_m3 += volume_m3[t];
+    report.volume_m3 += tet_signed_volume(p[std::size_t(tet[0])], p[std::size_t(tet[1])], p[std::size_t(tet[2])], p[std::size_t(tet[3])]);
     report.min_dihedral_deg = std::min(report.min_dihedral_deg, min_dihedral_deg(p, tet));
     for (int f = 0; f < 4; ++f) {
       // Face f, opposite corner f, turned so that its normal points out of the (positive) tetrahedron.

@@ -30,4 +30,10 @@ MeshRegion parse_region(const std::string& text);
 // for a label in two regions, std::runtime_error when a region gets no element.
 void assign_regions(VolumeMesh& mesh, const MaskVolume& labels, const std::vector<MeshRegion>& regions);
 
+// The report of a mesh whose mesh.region is set (by assign_regions, or by a mesher that makes the
+// regions itself): region_names, regions (elements, volume against the voxels', smallest dihedral
+// angle, outer triangles), boundary_region, interfaces and interface_regions. Throws
+// std::runtime_error when a region has no element.
+void report_regions(VolumeMesh& mesh, const MaskVolume& labels, const std::vector<MeshRegion>& regions);
+
 }  // namespace fetouch::meshes

@@ -34,7 +34,11 @@ std::array<Point3, 4> unit_outward_normals(const std::array<Point3, 4>& p) {
 // elements share this edge) is answered from those lists.
 class RepairMesh {
  public:
-  RepairMesh(std::vector<Point3>& nodes, std::vector<Tet>& tets) : nodes_(nodes), tets_(tets), alive_(tets.size(), true) {
+  // `region`: each element's region (or null: one region); faces between regions are surfaces as
+  // the boundary is (no flip crosses them, their nodes move only along them), and new elements take
+  // the region of those they replace.
+  RepairMesh(std::vector<Point3>& nodes, std::vector<Tet>& tets, std::vector<int>* region)
+      : nodes_(nodes), tets_(tets), region_(region), alive_(tets.size(), true) {
     star_.resize(nodes.size());
     for (int t = 0; t < static_cast<int>(tets.size()); ++t)
       for (int v : tets[t]) star_[v].push_back(t);
@@ -60,11 +64,16 @@ class RepairMesh {
     }
     return out;
   }
-  bool face_on_boundary(int a, int b, int c) const { return sharing({a, b, c}).size() == 1; }
-  bool edge_on_boundary(int a, int b) const {
+  // On the boundary or, with regions, on an interface between two.
+  bool face_on_boundary(int a, int b, int c) const {
+    const auto around = sharing({a, b, c});
+    return around.size() == 1 || (region_ && around.size() == 2 && (*region_)[around[0]] != (*region_)[around[1]]);
+  }
+  bool face_outside(int a, int b, int c) const { return sharing({a, b, c}).size() == 1; }
+  bool edge_on_boundary(int a, int b, bool outside_only = false) const {
     for (int t : sharing({a, b}))
       for (int c : tets_[t])
-        if (c != a && c != b && face_on_boundary(a, b, c)) return true;
+        if (c != a && c != b && (outside_only ? face_outside(a, b, c) : face_on_boundary(a, b, c))) return true;
     return false;
   }
   bool node_on_boundary(int v) const {
@@ -79,8 +88,9 @@ class RepairMesh {
     alive_[t] = false;
     for (int v : tets_[t]) star_[v].erase(std::find(star_[v].begin(), star_[v].end(), t));
   }
-  void add(Tet t) {
+  void add(Tet t, int region) {
     if (tet_signed_volume(nodes_[t[0]], nodes_[t[1]], nodes_[t[2]], nodes_[t[3]]) < 0) std::swap(t[2], t[3]);
+    if (region_) region_->push_back(region);
     tets_.push_back(t);
     alive_.push_back(true);
     for (int v : t) star_[v].push_back(static_cast<int>(tets_.size()) - 1);
@@ -106,8 +116,9 @@ class RepairMesh {
     double q_new = 180;
     for (const Tet& t : fresh) q_new = std::min(q_new, quality_of(t));
     if (!(q_new > quality(old) + 1e-6)) return false;
+    const int region = region_ ? (*region_)[old.front()] : 0;
     for (int t : old) kill(t);
-    for (const Tet& t : fresh) add(t);
+    for (const Tet& t : fresh) add(t, region);
     return true;
   }
 
@@ -117,14 +128,14 @@ class RepairMesh {
     const Tet& e = tets_[t];
     std::array<bool, 4> outside{};
     int count = 0;
-    for (int f = 0; f < 4; ++f) count += outside[f] = face_on_boundary(e[kFace[f][0]], e[kFace[f][1]], e[kFace[f][2]]);
+    for (int f = 0; f < 4; ++f) count += outside[f] = face_outside(e[kFace[f][0]], e[kFace[f][1]], e[kFace[f][2]]);
     if (count == 2) {
       // The two inner faces share the edge between the vertices opposite the two outer faces;
       // it becomes a boundary edge and must not be one already.
       int shared[2], k = 0;
       for (int f = 0; f < 4; ++f)
         if (outside[f]) shared[k++] = e[f];
-      if (edge_on_boundary(shared[0], shared[1])) return false;
+      if (edge_on_boundary(shared[0], shared[1], true)) return false;
     } else if (count == 3) {
       // The apex (the vertex opposite the inner face) leaves the mesh with the element.
       int apex = -1;
@@ -137,6 +148,29 @@ class RepairMesh {
     *volume_removed += volume(e);
     kill(t);
     return true;
+  }
+
+  // With regions: a sliver lying on an interface (two of its faces shared with elements of one
+  // other region) is handed to that region, and kept there only if a flip inside it then removes
+  // the sliver (the interface moves onto its two other faces, which nearly coincide with the first).
+  bool hand_over(int t, int* flips) {
+    if (!region_) return false;
+    const Tet e = tets_[t];
+    int across = -1, count = 0;
+    for (int f = 0; f < 4; ++f) {
+      const auto pair = sharing({e[kFace[f][0]], e[kFace[f][1]], e[kFace[f][2]]});
+      if (pair.size() != 2) continue;
+      const int other = (*region_)[pair[0] == t ? pair[1] : pair[0]];
+      if (other == (*region_)[t]) continue;
+      if (across >= 0 && other != across) return false;
+      across = other, ++count;
+    }
+    if (count < 2) return false;
+    const int own = (*region_)[t];
+    (*region_)[t] = across;
+    if (flip32(t, flips) || flip23(t, flips)) return true;
+    (*region_)[t] = own;
+    return false;
   }
 
   // 3-2: the three elements around an interior edge (a, b) become two on the triangle of the ring.
@@ -167,7 +201,7 @@ class RepairMesh {
     for (int f = 0; f < 4; ++f) {
       const int a = e[kFace[f][0]], b = e[kFace[f][1]], c = e[kFace[f][2]], d = e[f];
       const auto pair = sharing({a, b, c});
-      if (pair.size() != 2) continue;
+      if (pair.size() != 2 || (region_ && (*region_)[pair[0]] != (*region_)[pair[1]])) continue;
       const int other = pair[0] == t ? pair[1] : pair[0];
       int apex = -1;
       for (int v : tets_[other])
@@ -242,10 +276,12 @@ class RepairMesh {
   // Drops the dead elements and the nodes no element uses (the others keep their order).
   void compact() {
     std::vector<Tet> kept;
+    std::vector<int> kept_region;
     std::vector<int> index(nodes_.size(), -1);
     for (std::size_t t = 0; t < tets_.size(); ++t)
       if (alive_[t]) {
         kept.push_back(tets_[t]);
+        if (region_) kept_region.push_back((*region_)[t]);
         for (int v : tets_[t]) index[v] = 0;
       }
     std::vector<Point3> used;
@@ -255,11 +291,13 @@ class RepairMesh {
       for (int& v : t) v = index[v];
     tets_ = std::move(kept);
     nodes_ = std::move(used);
+    if (region_) *region_ = std::move(kept_region);
   }
 
  private:
   std::vector<Point3>& nodes_;
   std::vector<Tet>& tets_;
+  std::vector<int>* region_;
   std::vector<bool> alive_;
   std::vector<std::vector<int>> star_;
 };
@@ -380,7 +418,7 @@ QualityReport mesh_quality(const std::vector<Point3>& nodes, const std::vector<T
   return q;
 }
 
-SliverRepair repair_slivers(std::vector<Point3>& nodes, std::vector<Tet>& tets, double target_deg) {
+SliverRepair repair_slivers(std::vector<Point3>& nodes, std::vector<Tet>& tets, double target_deg, std::vector<int>* region) {
   SliverRepair report;
   bool changed_any = false;
   for (int pass = 0; pass < 20; ++pass) {
@@ -393,14 +431,14 @@ SliverRepair repair_slivers(std::vector<Point3>& nodes, std::vector<Tet>& tets, 
     }
     if (pass == 0) report.min_dihedral_before_deg = report.min_dihedral_after_deg = worst;
     if (bad.empty()) break;
-    RepairMesh mesh(nodes, tets);
+    RepairMesh mesh(nodes, tets, region);
     std::sort(bad.begin(), bad.end());
     bool changed = false;
     for (const auto& [q, t] : bad) {
       if (!mesh.alive(t) || mesh.quality(t) >= target_deg) continue;
       // Flips first (they keep the boundary), then moving a node, then peeling (which cuts a
       // little off the tissue).
-      if (mesh.flip32(t, &report.flips32) || mesh.flip23(t, &report.flips23)) {
+      if (mesh.flip32(t, &report.flips32) || mesh.flip23(t, &report.flips23) || mesh.hand_over(t, &report.flips23)) {
         changed = true;
       } else if (mesh.relocate(t)) {
         ++report.relocated, changed = true;

@@ -72,7 +72,11 @@ struct SliverRepair {
 };
 
 // Improves every element whose smallest dihedral angle is under `target_deg`, as far as the
-// operations above allow; nodes no element uses any more are removed (indices renumbered).
-SliverRepair repair_slivers(std::vector<Point3>& nodes, std::vector<Tet>& tets, double target_deg);
+// operations above allow; nodes no element uses any more are removed (indices renumbered). With
+// `region` (each element's), the faces between regions are kept as the boundary is: no flip crosses
+// them, their nodes move only along them where they are flat, and nothing is peeled off them; the
+// regions follow the elements.
+SliverRepair repair_slivers(std::vector<Point3>& nodes, std::vector<Tet>& tets, double target_deg,
+                            std::vector<int>* region = nullptr);
 
 }  // namespace fetouch::meshes

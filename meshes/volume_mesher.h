@@ -47,6 +47,14 @@ struct MeshingSettings {
   // element_size_mm over one more radius (none when the radius is 0).
   std::array<double, 3> refine_center_mm{0, 0, 0};
   double refine_radius_mm = 0, refine_size_mm = 0;
+  // The conforming mesher of a label map (meshes/labeled_mesher.h): each region's size (by region
+  // index; absent or 0: element_size_mm), how fast sizes may grow away from a finer region or the
+  // refinement ball (mm per mm), the Gaussian that smooths the label boundaries (voxels), and how far
+  // a surface triangle's circumcentre may stray from its surface (0: half a voxel).
+  std::vector<double> region_size_mm;
+  double grading = 0.3;
+  double label_smoothing_voxels = 1.0;
+  double surface_distance_mm = 0;
   // Progress of the long steps: (step name, fraction of the whole done).
   std::function<void(const std::string&, double)> progress;
 };
@@ -89,6 +97,19 @@ struct VolumeMesh {
   // index first); written as surface groups named LOWER_HIGHER (`wall_fluid`).
   std::vector<std::array<int, 3>> interfaces;
   std::vector<std::array<int, 2>> interface_regions;
+  // How smooth each surface is (meshes/interface_quality.h): every interface (LOWER_HIGHER) and
+  // every region's outer surface (REGION_outside), or the one outer surface (`outside`).
+  struct SurfaceReport {
+    std::string name;
+    long triangles = 0;
+    // The angle between the normal lines of triangles that share an edge (0 to 90 degrees, their
+    // orientation ignored): median, 99th percentile and largest.
+    double median_angle_deg = 0, p99_angle_deg = 0, max_angle_deg = 0;
+    // The largest distance from the surface (its nodes, edge midpoints and centroids) to the label
+    // boundary it stands for (the voxel faces between its two sides); -1 when not measured.
+    double max_distance_mm = -1;
+  };
+  std::vector<SurfaceReport> surfaces;
 };
 
 // The interfaces' names in the order their groups are written (by region pair), with their faces.

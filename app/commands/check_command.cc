@@ -20,6 +20,7 @@
 #include "app/mpi_session.h"
 #include "app/progress.h"
 #include "app/recording.h"
+#include "app/mesh_pipeline.h"
 #include "app/scene_mesh.h"
 #include "config/scene_loader.h"
 #include "fem/physical_problem.h"
@@ -206,12 +207,11 @@ std::string describe_mesh(const SceneReport& r) {
     }
     case config::MeshSource::file: text = m.path.string(); break;
     case config::MeshSource::volume:
-      text = "meshed from " + m.path.string() + " at " + number(m.meshing.target_size_m * 1e3) +
-             " mm";
+      text = "meshed from " + m.path.string() + " at " + meshing_sizes_text(m.meshing);
       break;
     case config::MeshSource::phantom:
       text = "the synthetic phantom (seed " + std::to_string(m.phantom.seed) + ", " + number(m.phantom.spacing_m * 1e3) +
-             " mm voxels) meshed at " + number(m.meshing.target_size_m * 1e3) + " mm";
+             " mm voxels) meshed at " + meshing_sizes_text(m.meshing);
       break;
   }
   std::string element = config::to_string(m.element);

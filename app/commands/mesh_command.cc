@@ -18,6 +18,7 @@
 #include "app/output_guard.h"
 #include "app/json_writer.h"
 #include "app/log.h"
+#include "app/mesh_pipeline.h"
 #include "app/progress.h"
 #include "app/scene_mesh.h"
 #include "imaging/segmentation.h"
@@ -41,6 +42,7 @@ struct MeshOptions {
   // (default: halfway between the 5th and 95th percentiles)
   std::string smoothing = "gaussian";
   std::string surface = "restricted";
+  std::vector<std::string> region_sizes;  // NAME=MM, conforming only
   double smoothing_mm = 1.0;
   int closing = 2;
   double size_mm = 3;
@@ -62,7 +64,6 @@ int run_mesh(const MeshOptions& o) {
     return kExitBadInput;
   }
   meshes::VolumeMesh mesh;
-  meshes::MaskVolume mask, labels_in_regions;
   std::vector<meshes::MeshRegion> regions;
   std::vector<int> labels = o.labels;
   try {
@@ -85,46 +86,64 @@ int run_mesh(const MeshOptions& o) {
   std::vector<std::pair<std::string, double>> phases;
   float threshold_used = 0;
   bool thresholded = false;
+  imaging::Volume<float> volume;
   try {
     log::info() << "reading " << o.volume;
-    const imaging::Volume<float> volume = imaging::read_volume(o.volume);
+    volume = imaging::read_volume(o.volume);
     phases.push_back({"reading", seconds_since(start)});
-    if (!regions.empty()) labels_in_regions = label_map(volume);  // the label map itself
-    log::info() << "segmenting";
-    imaging::TissueSegmentation segmentation;
-    segmentation.labels = labels, segmentation.fetus = o.fetus, segmentation.smoothing_mm = o.smoothing_mm;
-    segmentation.closing = o.closing;
-    segmentation.threshold = o.threshold, segmentation.threshold_percentile = o.threshold_percentile;
-    thresholded = labels.empty() && !o.fetus;
-    if (o.smoothing == "none") segmentation.smoothing = imaging::TissueSegmentation::Smoothing::none;
-    if (o.smoothing == "median") segmentation.smoothing = imaging::TissueSegmentation::Smoothing::median;
-    const imaging::Mask m = imaging::segment_tissue(volume, segmentation, &threshold_used);
-    if (thresholded) log::info() << "threshold " << threshold_used;
-    mask = mask_volume(m);
-    phases.push_back({"segmentation", seconds_since(start) - phases.back().second});
   } catch (const std::exception& e) {
     std::cerr << "error: " << naming(o.volume, e.what()) << "\n";
     return kExitBadInput;
   }
+  MeshRequest request;
+  auto& segmentation = request.segmentation;
+  segmentation.labels = o.labels, segmentation.fetus = o.fetus, segmentation.smoothing_mm = o.smoothing_mm;
+  segmentation.closing = o.closing;
+  segmentation.threshold = o.threshold, segmentation.threshold_percentile = o.threshold_percentile;
+  if (o.smoothing == "none") segmentation.smoothing = imaging::TissueSegmentation::Smoothing::none;
+  if (o.smoothing == "median") segmentation.smoothing = imaging::TissueSegmentation::Smoothing::median;
+  request.regions = regions;
+  request.surface = o.surface == "contoured"    ? config::MeshSurface::contoured
+                    : o.surface == "conforming" ? config::MeshSurface::conforming
+                                                : config::MeshSurface::restricted;
+  meshes::MeshingSettings& settings = request.settings;
+  settings.element_size_mm = o.size_mm;
+  settings.partitions = o.partitions;
+  settings.min_dihedral_deg = o.min_dihedral_deg;
+  for (const std::string& text : o.region_sizes) {
+    const std::size_t equals = text.find('=');
+    std::size_t at = regions.size();
+    for (std::size_t r = 0; r < regions.size() && equals != std::string::npos; ++r)
+      if (regions[r].name == text.substr(0, equals)) at = r;
+    double size = 0;
+    try {
+      if (at < regions.size()) size = std::stod(text.substr(equals + 1));
+    } catch (const std::exception&) {
+    }
+    if (at == regions.size() || !(size > 0) || o.surface != "conforming") {
+      std::cerr << "error: --region-size " << text << ": expected NAME=MM for a region of --regions, with --surface conforming\n";
+      return kExitBadInput;
+    }
+    settings.region_size_mm.resize(regions.size(), 0);
+    settings.region_size_mm[at] = size;
+  }
+  if (!o.refine.empty()) {
+    settings.refine_center_mm = {o.refine[0], o.refine[1], o.refine[2]};
+    settings.refine_radius_mm = o.refine[3], settings.refine_size_mm = o.refine[4];
+  }
   try {
     Progress progress("meshing", 100, std::cerr, Progress::stderr_is_terminal());
-    meshes::MeshingSettings settings;
-    settings.element_size_mm = o.size_mm;
-    settings.partitions = o.partitions;
-    settings.min_dihedral_deg = o.min_dihedral_deg;
-    settings.restricted_surface = o.surface == "restricted";
-    if (!o.refine.empty()) {
-      settings.refine_center_mm = {o.refine[0], o.refine[1], o.refine[2]};
-      settings.refine_radius_mm = o.refine[3], settings.refine_size_mm = o.refine[4];
-    }
     settings.progress = [&](const std::string& step, double done) {
       log::debug() << step;
       progress.update(static_cast<long>(100 * done));
     };
-    mesh = meshes::mesh_mask(mask, settings);
-    if (!regions.empty()) meshes::assign_regions(mesh, labels_in_regions, regions);
+    log::info() << "segmenting and meshing";
+    MeshOutcome outcome = mesh_volume(volume, request);
     progress.finish();
-    phases.insert(phases.end(), mesh.phases.begin(), mesh.phases.end());
+    mesh = std::move(outcome.mesh);
+    thresholded = outcome.thresholded, threshold_used = outcome.threshold_used;
+    if (thresholded) log::info() << "threshold " << threshold_used;
+    phases.insert(phases.end(), outcome.phases.begin(), outcome.phases.end());
   } catch (const std::exception& e) {
     std::cerr << "error: " << o.volume << ": " << e.what() << "\n";
     return kExitBadInput;
@@ -223,6 +242,18 @@ int run_mesh(const MeshOptions& o) {
     json.end_object();
   }
   json.end_array();
+  json.key("surfaces").begin_array();
+  for (const auto& f : mesh.surfaces) {
+    json.begin_object();
+    json.key("name").value(f.name);
+    json.key("triangles").value(f.triangles);
+    json.key("median_neighbour_angle_deg").value(f.median_angle_deg);
+    json.key("p99_neighbour_angle_deg").value(f.p99_angle_deg);
+    json.key("max_neighbour_angle_deg").value(f.max_angle_deg);
+    json.key("max_distance_to_labels_mm").value(f.max_distance_mm);
+    json.end_object();
+  }
+  json.end_array();
   json.key("interface_triangles").value(mesh.interface_triangles);
   json.key("interfaces").begin_object();  // surface group name: its triangles
   for (const auto& [name, faces] : meshes::interface_groups(mesh)) json.key(name).value(faces);
@@ -253,6 +284,10 @@ int run_mesh(const MeshOptions& o) {
       std::printf("  %ld interface triangles between regions (surface groups: %s)\n", mesh.interface_triangles,
                   groups.empty() ? "none" : groups.c_str());
     }
+    for (const auto& f : mesh.surfaces)
+      std::printf("  surface %s: %ld triangles, neighbours' normals %.1f deg median, %.1f deg 99th percentile; within %.2f mm of "
+                  "its label boundary\n",
+                  f.name.c_str(), f.triangles, f.median_angle_deg, f.p99_angle_deg, f.max_distance_mm);
     std::printf("  made by: %s%s\n", mesh.path.c_str(), mesh.attempts.size() > 1 ? " (after the paths before it failed or fell short)" : "");
     if (mesh.attempts.size() > 1)
       for (const auto& a : mesh.attempts) std::printf("    tried %s\n", a.c_str());
@@ -304,6 +339,7 @@ void add_mesh_command(CLI::App& parent, int& exit_code) {
   cmd->add_option("--regions", o->regions,
                   "Regions of a label map, NAME=L1,L2 each: one conforming mesh of their union, each element in the "
                   "region covering most of it (volume groups NAME, surfaces NAME_outer and A_B per interface)");
+  cmd->add_option("--region-size", o->region_sizes, "With --surface conforming: a region's element size, NAME=MM (others: --size)");
   cmd->add_flag("--fetus", o->fetus, "Segment the fetus of a fetal ultrasound volume");
   cmd->add_option("--threshold", o->threshold,
                   "Intensity threshold in the image's units (Hounsfield units for a CT; default: between the 5th and 95th "
@@ -312,9 +348,10 @@ void add_mesh_command(CLI::App& parent, int& exit_code) {
                   "Threshold at this percentile of the smoothed volume's intensities, 0 to 100")
       ->check(CLI::Range(0.0, 100.0));
   cmd->add_option("--surface", o->surface,
-                  "How the surface is made: restricted (CGAL's restricted Delaunay surface first, then the others) or "
-                  "contoured (only VTK's contour, remeshed by Gmsh or kept: the mesher before CGAL)")
-      ->check(CLI::IsMember({"restricted", "contoured"}))
+                  "How the surface is made: restricted (CGAL's restricted Delaunay surface first, then the others), "
+                  "contoured (only VTK's contour, remeshed by Gmsh or kept: the mesher before CGAL), or conforming "
+                  "(with --regions: every region a subdomain of one CGAL mesh, each interface a smooth surface of its own)")
+      ->check(CLI::IsMember({"restricted", "contoured", "conforming"}))
       ->capture_default_str();
   cmd->add_option("--smoothing", o->smoothing, "Speckle filter before the threshold: none, gaussian or median (3x3x3)")
       ->check(CLI::IsMember({"none", "gaussian", "median"}))

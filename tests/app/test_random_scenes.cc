@@ -31,6 +31,7 @@ const std::map<std::string, std::string> kNotDrawn = {
     {"smoothing: median", "volume meshing"},
     {"surface: restricted", "volume meshing"},
     {"surface: contoured", "volume meshing"},
+    {"surface: conforming", "volume meshing (tests/meshes/test_labeled_mesher.cc, tests/app/test_mesh_command.cc)"},
 };
 
 std::vector<RandomScene> drawn(unsigned int seed) {
