@@ -150,29 +150,6 @@ class RepairMesh {
     return true;
   }
 
-  // With regions: a sliver lying on an interface (two of its faces shared with elements of one
-  // other region) is handed to that region, and kept there only if a flip inside it then removes
-  // the sliver (the interface moves onto its two other faces, which nearly coincide with the first).
-  bool hand_over(int t, int* flips) {
-    if (!region_) return false;
-    const Tet e = tets_[t];
-    int across = -1, count = 0;
-    for (int f = 0; f < 4; ++f) {
-      const auto pair = sharing({e[kFace[f][0]], e[kFace[f][1]], e[kFace[f][2]]});
-      if (pair.size() != 2) continue;
-      const int other = (*region_)[pair[0] == t ? pair[1] : pair[0]];
-      if (other == (*region_)[t]) continue;
-      if (across >= 0 && other != across) return false;
-      across = other, ++count;
-    }
-    if (count < 2) return false;
-    const int own = (*region_)[t];
-    (*region_)[t] = across;
-    if (flip32(t, flips) || flip23(t, flips)) return true;
-    (*region_)[t] = own;
-    return false;
-  }
-
   // 3-2: the three elements around an interior edge (a, b) become two on the triangle of the ring.
   bool flip32(int t, int* flips) {
     const Tet e = tets_[t];
@@ -239,7 +216,10 @@ class RepairMesh {
         const double length = norm(normal);
         for (double& c : normal) c /= length;
         bool flat = true;
-        for (const Point3& n : face_normals) flat = flat && dot(n, normal) > std::cos(25 * M_PI / 180) * norm(n);
+        // Within 25 degrees of flat on a boundary; 10 where regions meet, whose interfaces a
+        // trainee sees and whose smoothness the conforming mesher is for.
+        const double flat_deg = region_ ? 10 : 25;
+        for (const Point3& n : face_normals) flat = flat && dot(n, normal) > std::cos(flat_deg * M_PI / 180) * norm(n);
         if (!flat) continue;
       }
       Point3 target{0, 0, 0};
@@ -438,7 +418,7 @@ SliverRepair repair_slivers(std::vector<Point3>& nodes, std::vector<Tet>& tets, 
       if (!mesh.alive(t) || mesh.quality(t) >= target_deg) continue;
       // Flips first (they keep the boundary), then moving a node, then peeling (which cuts a
       // little off the tissue).
-      if (mesh.flip32(t, &report.flips32) || mesh.flip23(t, &report.flips23) || mesh.hand_over(t, &report.flips23)) {
+      if (mesh.flip32(t, &report.flips32) || mesh.flip23(t, &report.flips23)) {
         changed = true;
       } else if (mesh.relocate(t)) {
         ++report.relocated, changed = true;

@@ -161,6 +161,31 @@ TEST(MeshCommand, RefinementNearAPoint) {
   fs::remove_all(dir);
 }
 
+TEST(MeshCommand, ConformingRegionsOfThePhantomHaveSmoothInterfaces) {
+  // The default scene's anatomy (wall, fluid, head, body; the fetus 31 mm up so that its head
+  // reaches the wall) by the conforming mesher, graded from 3 mm in the body to 8 mm in the fluid.
+  const fs::path dir = fs::temp_directory_path() / ("fetouch_mesh_conforming_" + std::to_string(::getpid()));
+  ASSERT_EQ(run_command(fetouch("phantom --no-speckle --fetus-offset 0 0 31 --out " + (dir / "phantom").string())).exit_code, 0);
+  const auto r = run_command(fetouch("mesh " + (dir / "phantom" / "phantom_labels.mha").string() +
+                                     " --regions wall=1 fluid=2 head=3,4 body=5,6 --surface conforming --size 8 "
+                                     "--region-size wall=6 --region-size head=4 --region-size body=3 --min-dihedral 5 --json --out " +
+                                     (dir / "anatomy.msh").string()));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const YAML::Node j = YAML::Load(r.out);
+  EXPECT_TRUE(j["closed_manifold"].as<bool>());
+  EXPECT_EQ(j["quality"]["inverted"].as<long>(), 0);
+  ASSERT_EQ(j["surfaces"].size(), 6u);  // wall's outside and five interfaces
+  for (const auto& surface : j["surfaces"]) {
+    SCOPED_TRACE(surface["name"].as<std::string>());
+    EXPECT_LE(surface["median_neighbour_angle_deg"].as<double>(), 10);
+    EXPECT_LE(surface["p99_neighbour_angle_deg"].as<double>(), 35);
+    EXPECT_LE(surface["max_distance_to_labels_mm"].as<double>(), std::sqrt(3.0));
+  }
+  for (const auto& region : j["regions"])
+    EXPECT_NEAR(region["volume_m3"].as<double>() / region["voxel_volume_m3"].as<double>(), 1, 0.01) << region["name"];
+  fs::remove_all(dir);
+}
+
 TEST(MeshCommand, SharedSpineVolume) {
   const fs::path volume = fs::path(FETOUCH_SOURCE_DIR) / ".." / "shared" / "data" / "ultrasound" /
                           "spine_phantom_freehand_reconstructed.mha";

@@ -183,6 +183,26 @@ TEST(SceneLoader, MeshingRegions) {
   EXPECT_THROW(scene("{regions: {wall: 1}}"), SceneError);
 }
 
+// meshing.surface: conforming with per-region sizes, which need the conforming mesher and regions
+// that exist.
+TEST(SceneLoader, ConformingRegionsTakeSizes) {
+  const auto scene = [&](const std::string& meshing) {
+    return parse_scene("mesh:\n  phantom: {seed: 1}\n  meshing: " + meshing +
+                           "\nmaterial: {model: neo_hookean, youngs_modulus_pa: 5000, poisson_ratio: 0.45}\n",
+                       "inline", kData)
+        .scene;
+  };
+  const Scene s = scene("{regions: {wall: [1], fetus: [3]}, surface: conforming, sizes: {fetus: 0.003}}");
+  EXPECT_EQ(s.mesh.meshing.surface, MeshSurface::conforming);
+  ASSERT_EQ(s.mesh.meshing.sizes_m.size(), 1u);
+  EXPECT_EQ(s.mesh.meshing.sizes_m[0].first, "fetus");
+  EXPECT_DOUBLE_EQ(s.mesh.meshing.sizes_m[0].second, 0.003);
+  EXPECT_THROW(scene("{labels: [1], surface: conforming}"), SceneError);  // no regions
+  EXPECT_THROW(scene("{regions: {wall: [1]}, sizes: {wall: 0.003}}"), SceneError);  // not conforming
+  EXPECT_THROW(scene("{regions: {wall: [1]}, surface: conforming, sizes: {fluid: 0.003}}"), SceneError);  // no such region
+  EXPECT_THROW(scene("{regions: {wall: [1]}, surface: conforming, sizes: {wall: -1}}"), SceneError);
+}
+
 TEST(SceneLoader, EmptyAndMissingFilesAreErrors) {
   EXPECT_THROW(parse_scene("", "empty.yaml", kData), SceneError);
   EXPECT_THROW(parse_scene("# only a comment\n", "empty.yaml", kData), SceneError);
