@@ -50,7 +50,8 @@ struct MeshingSettings {
   // The conforming mesher of a label map (meshes/labeled_mesher.h): each region's size (by region
   // index; absent or 0: element_size_mm), how fast sizes may grow away from a finer region or the
   // refinement ball (mm per mm), the Gaussian that smooths the label boundaries (voxels), and how far
-  // a surface triangle's circumcentre may stray from its surface (0: half a voxel).
+  // at most a surface triangle's circumcentre may stray from its surface (0: half a voxel; less
+  // where the elements are small: 4 % of their size, at least a tenth of a voxel).
   std::vector<double> region_size_mm;
   double grading = 0.3;
   double label_smoothing_voxels = 1.0;

@@ -328,7 +328,10 @@ void add_mesh_command(CLI::App& parent, int& exit_code) {
       "With --regions, one mesh of the regions' union whose elements each take the region covering most\n"
       "of them (the regions share their interfaces node for node; an interface follows element faces),\n"
       "volume groups named as given, surface groups NAME_outer and one per interface, A_B (the\n"
-      "regions in the order given), and a report per region.\n"
+      "regions in the order given), and a report per region. With --surface conforming the label map\n"
+      "itself is meshed: every region a subdomain of one CGAL mesh, each interface a smooth surface of\n"
+      "its own, the curves where three regions meet kept, sizes per region (--region-size NAME=MM);\n"
+      "the report gives each surface's smoothness and distance to its labels (docs/meshing.md).\n"
       "Example: fetouch mesh phantom/phantom_labels.mha --labels 3 4 5 6 --size 3 --out fetus.msh\n"
       "         fetouch mesh phantom/phantom_labels.mha --regions wall=1 fluid=2 fetus=3,4,5,6 --size 4");
   cmd->add_option("volume", o->volume, "Volume (.mha, .mhd, .vti, .nrrd, .nii, .nii.gz, .hdr) or a folder with a DICOM series")
