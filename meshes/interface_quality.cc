@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <map>
+#include <set>
 
 namespace fetouch::meshes {
 
@@ -123,15 +124,20 @@ std::vector<VolumeMesh::SurfaceReport> surface_smoothness(const VolumeMesh& mesh
     if (measure) {
       report.max_distance_mm = 0;
       const auto& p = mesh.nodes_m;
+      const auto farther = [&](const Point3& x) {
+        report.max_distance_mm = std::max(report.max_distance_mm, boundary.distance_mm(x, sides[0], sides[1]));
+      };
+      std::set<int> nodes;  // each node once, however many triangles share it
+      for (const auto& t : triangles) nodes.insert(t.begin(), t.end());
+      for (int v : nodes) farther(p[std::size_t(v)]);
       for (const auto& t : triangles) {
         const Point3 &a = p[std::size_t(t[0])], &b = p[std::size_t(t[1])], &c = p[std::size_t(t[2])];
         const auto mix = [](const Point3& x, const Point3& y, const Point3& z, double wx, double wy, double wz) {
           return Point3{wx * x[0] + wy * y[0] + wz * z[0], wx * x[1] + wy * y[1] + wz * z[1], wx * x[2] + wy * y[2] + wz * z[2]};
         };
-        const Point3 samples[] = {a, b, c, mix(a, b, c, 0.5, 0.5, 0), mix(a, b, c, 0, 0.5, 0.5), mix(a, b, c, 0.5, 0, 0.5),
-                                  mix(a, b, c, 1 / 3.0, 1 / 3.0, 1 / 3.0)};
-        for (const Point3& x : samples)
-          report.max_distance_mm = std::max(report.max_distance_mm, boundary.distance_mm(x, sides[0], sides[1]));
+        for (const Point3& x : {mix(a, b, c, 0.5, 0.5, 0), mix(a, b, c, 0, 0.5, 0.5), mix(a, b, c, 0.5, 0, 0.5),
+                                mix(a, b, c, 1 / 3.0, 1 / 3.0, 1 / 3.0)})
+          farther(x);
       }
     }
     out.push_back(report);

@@ -56,7 +56,12 @@ struct GridField {
   std::array<double, 3> h{};
   std::vector<float> v;
   float at(long i, long j, long k) const { return v[std::size_t((k * n[1] + j) * n[0] + i)]; }
-  double operator()(double x, double y, double z) const {
+  // The 8 voxels around a point and their trilinear weights (the same for every field of a grid).
+  struct Stencil {
+    std::array<std::size_t, 8> index;
+    std::array<double, 8> weight;
+  };
+  Stencil stencil(double x, double y, double z) const {
     const double t[3] = {x / h[0], y / h[1], z / h[2]};
     long i0[3];
     double f[3];
@@ -65,17 +70,26 @@ struct GridField {
       i0[c] = static_cast<long>(clamped);
       f[c] = clamped - double(i0[c]);
     }
-    double sum = 0;
+    Stencil s{};
+    int corner = 0;
     for (int dk = 0; dk < 2; ++dk)
       for (int dj = 0; dj < 2; ++dj)
-        for (int di = 0; di < 2; ++di)
-          sum += (di ? f[0] : 1 - f[0]) * (dj ? f[1] : 1 - f[1]) * (dk ? f[2] : 1 - f[2]) *
-                 at(std::min<long>(i0[0] + di, n[0] - 1), std::min<long>(i0[1] + dj, n[1] - 1), std::min<long>(i0[2] + dk, n[2] - 1));
+        for (int di = 0; di < 2; ++di, ++corner) {
+          const long i = std::min<long>(i0[0] + di, n[0] - 1), j = std::min<long>(i0[1] + dj, n[1] - 1),
+                     k = std::min<long>(i0[2] + dk, n[2] - 1);
+          s.index[std::size_t(corner)] = std::size_t((k * n[1] + j) * n[0] + i);
+          s.weight[std::size_t(corner)] = (di ? f[0] : 1 - f[0]) * (dj ? f[1] : 1 - f[1]) * (dk ? f[2] : 1 - f[2]);
+        }
+    return s;
+  }
+  double at(const Stencil& s) const {
+    double sum = 0;
+    for (std::size_t c = 0; c < 8; ++c) sum += s.weight[c] * v[s.index[c]];
     return sum;
   }
+  double operator()(double x, double y, double z) const { return at(stencil(x, y, z)); }
 };
 
-// The region (1-based; 0 the background) whose blurred indicator is the largest at a point.
 // Each region's indicator may be raised by a bias (a level offset), which moves its surfaces out
 // by about bias / (the indicators' difference's slope there): the second mesh's regions are given
 // the volume their voxels have, where the blur and the triangles' chords take a little off a small
@@ -86,8 +100,9 @@ struct RegionOf {
   int operator()(const Kernel::Point_3& p) const {
     int best = 0;
     double best_value = -1e300;
+    const GridField::Stencil s = indicators->front().stencil(p.x(), p.y(), p.z());  // one grid for all
     for (std::size_t r = 0; r < indicators->size(); ++r) {
-      const double value = (*indicators)[r](p.x(), p.y(), p.z()) + (bias.empty() ? 0.0 : bias[r]);
+      const double value = (*indicators)[r].at(s) + (bias.empty() ? 0.0 : bias[r]);
       if (value > best_value) best_value = value, best = static_cast<int>(r);
     }
     return best;

@@ -65,11 +65,9 @@ int run_mesh(const MeshOptions& o) {
   }
   meshes::VolumeMesh mesh;
   std::vector<meshes::MeshRegion> regions;
-  std::vector<int> labels = o.labels;
   try {
     for (const std::string& text : o.regions) {
       regions.push_back(meshes::parse_region(text));
-      labels.insert(labels.end(), regions.back().labels.begin(), regions.back().labels.end());
     }
   } catch (const std::invalid_argument& e) {
     std::cerr << "error: --regions " << e.what() << "\n";
