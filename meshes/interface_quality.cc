@@ -110,7 +110,10 @@ std::vector<VolumeMesh::SurfaceReport> surface_smoothness(const VolumeMesh& mesh
   const bool measure = !labels.data.empty();
 
   std::vector<VolumeMesh::SurfaceReport> out;
-  for (const auto& [sides, triangles] : groups) {
+  for (const auto& group : groups) {
+    // Named references, not a structured binding: C++17 lambdas cannot capture bindings (clang refuses).
+    const auto& sides = group.first;
+    const auto& triangles = group.second;
     VolumeMesh::SurfaceReport report;
     const auto name = [&](int r) {
       return r < 0 ? std::string("outside") : r < int(mesh.region_names.size()) ? mesh.region_names[std::size_t(r)] : "tissue";
