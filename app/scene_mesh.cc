@@ -54,6 +54,9 @@ std::string cache_key(const config::MeshSpec& spec) {
   key << '|' << m.target_size_m << '|' << m.fetus << '|' << (m.threshold ? *m.threshold : -1.0) << '|'
       << static_cast<int>(m.smoothing) << '|' << m.smoothing_sigma_m << '|' << m.closing_voxels << '|'
       << static_cast<int>(m.surface) << '|';
+  // The conforming mesher's own revision (2: Lloyd smoothing and the interface-aware repair), kept
+  // apart so that the other paths' cached meshes stay valid.
+  if (m.surface == config::MeshSurface::conforming) key << "conforming 2|";
   for (const auto& [name, size] : m.sizes_m) key << name << ':' << size << ',';
   for (int l : m.labels) key << l << ',';
   for (const auto& [name, labels] : m.regions) {

@@ -350,12 +350,12 @@ VolumeMesh mesh_labels(const MaskVolume& labels, const std::vector<MeshRegion>& 
                          (n[2] - 1) * labels.spacing_mm[2]);
   const double voxel = *std::min_element(labels.spacing_mm.begin(), labels.spacing_mm.end());
   const double distance = s.surface_distance_mm > 0 ? s.surface_distance_mm : 0.5 * voxel;
-  // Triangles within a small fraction of their size of the surface (at least a tenth of a voxel,
+  // Triangles within 3 % of their size of the surface (at least a twentieth of a voxel,
   // at most `distance`): on a limb of a few millimetres' radius that is what keeps neighbouring
   // triangles' normals within a few tens of degrees.
-  const double fine = 0.1 * voxel;
+  const double fine = 0.05 * voxel;
   const auto distance_at = [size, distance, fine](const Kernel::Point_3& p, int, const Domain::Index&) {
-    return std::clamp(0.04 * (*size)(p.x(), p.y(), p.z()), fine, std::max(fine, distance));
+    return std::clamp(0.03 * (*size)(p.x(), p.y(), p.z()), fine, std::max(fine, distance));
   };
   const Criteria criteria(params::edge_size = SizeAt{size, 1.0}, params::facet_angle = 25,
                           params::facet_size = SizeAt{size, kFacetRadiusPerEdge}, params::facet_distance = distance_at,
@@ -435,6 +435,11 @@ VolumeMesh mesh_labels(const MaskVolume& labels, const std::vector<MeshRegion>& 
     // CGAL stops improving an element once it passes the bound; 15 degrees leaves the repair below
     // fewer elements under 10 than a bound at the angle asked (8.2 against 10.8 degrees on the phantom).
     const double bound = std::max(15.0, s.min_dihedral_deg + 5);
+    // Five Lloyd iterations first (a fixed count, not a time: the mesh is the same on any machine):
+    // they even out the node spacing, surface nodes included, so that fewer slivers are left for
+    // perturbation and exudation (10.8 against 5.3 degrees on the phantom before the repair).
+    CGAL::lloyd_optimize_mesh_3(complex, domain, params::time_limit = 0, params::max_iteration_number = 5,
+                                params::convergence = 0.02, params::freeze_bound = 0.01);
     CGAL::perturb_mesh_3(complex, domain, params::time_limit = budget, params::sliver_bound = bound);
     CGAL::exude_mesh_3(complex, params::time_limit = budget, params::sliver_bound = bound);
   }

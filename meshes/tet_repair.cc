@@ -192,6 +192,156 @@ class RepairMesh {
     return false;
   }
 
+  // 4-4: the four elements around an interior edge (a, b) become four around a diagonal of their
+  // ring, whichever of the two improves the worst angle more.
+  bool flip44(int t, int* flips) {
+    const Tet e = tets_[t];
+    for (int i = 0; i < 4; ++i)
+      for (int j = i + 1; j < 4; ++j) {
+        const int a = e[i], b = e[j];
+        const auto ring = sharing({a, b});
+        if (ring.size() != 4 || edge_on_boundary(a, b)) continue;
+        const std::vector<int> cycle = ring_cycle(ring, a, b);
+        if (cycle.size() != 4) continue;
+        for (int d = 0; d < 2; ++d) {
+          const int u = cycle[std::size_t(d)], w = cycle[std::size_t(d + 2)];
+          const int x = cycle[std::size_t(d + 1)], y = cycle[std::size_t((d + 3) % 4)];
+          if (!sharing({u, w}).empty()) continue;
+          if (replace(ring, {{u, w, x, a}, {u, w, x, b}, {u, w, y, a}, {u, w, y, b}})) {
+            ++*flips;
+            return true;
+          }
+        }
+      }
+    return false;
+  }
+
+  // Edge removal (rings of 5 to 7 elements): the elements around an interior edge (a, b) become
+  // two fans, to a and to b, over the triangulation of their ring whose worst element is best
+  // (dynamic programming over the ring polygon's triangulations).
+  bool remove_edge(int t, int* removals) {
+    const Tet e = tets_[t];
+    for (int i = 0; i < 4; ++i)
+      for (int j = i + 1; j < 4; ++j) {
+        const int a = e[i], b = e[j];
+        const auto ring = sharing({a, b});
+        const int n = static_cast<int>(ring.size());
+        if (n < 5 || n > 7 || edge_on_boundary(a, b)) continue;
+        std::vector<int> cycle = ring_cycle(ring, a, b);
+        if (static_cast<int>(cycle.size()) != n) continue;
+        // The orientation every new element over a must have (and the opposite over b).
+        double fan = 0;
+        for (int k = 1; k + 1 < n; ++k) fan += volume({cycle[0], cycle[std::size_t(k)], cycle[std::size_t(k + 1)], a});
+        const double sign = fan >= 0 ? 1 : -1;
+        const auto triangle_quality = [&](int p, int q, int r) {
+          const Tet over_a{cycle[std::size_t(p)], cycle[std::size_t(q)], cycle[std::size_t(r)], a};
+          const Tet over_b{cycle[std::size_t(p)], cycle[std::size_t(q)], cycle[std::size_t(r)], b};
+          if (sign * volume(over_a) <= 0 || sign * volume(over_b) >= 0) return -1.0;
+          return std::min(quality_of(over_a), quality_of(over_b));
+        };
+        // best[p][q]: the best worst angle over triangulations of the sub-polygon p..q; cut[p][q] its apex.
+        double best[7][7] = {};
+        int cut[7][7] = {};
+        for (int span = 2; span < n; ++span)
+          for (int p = 0; p + span < n; ++p) {
+            const int q = p + span;
+            best[p][q] = -1;
+            for (int r = p + 1; r < q; ++r) {
+              double v = triangle_quality(p, r, q);
+              if (r - p > 1) v = std::min(v, best[p][r]);
+              if (q - r > 1) v = std::min(v, best[r][q]);
+              if (v > best[p][q]) best[p][q] = v, cut[p][q] = r;
+            }
+          }
+        if (!(best[0][n - 1] > quality(ring) + 1e-6)) continue;
+        std::vector<Tet> fresh;
+        std::vector<std::pair<int, int>> todo{{0, n - 1}};
+        while (!todo.empty()) {
+          const auto [p, q] = todo.back();
+          todo.pop_back();
+          if (q - p < 2) continue;
+          const int r = cut[p][q];
+          const int u = cycle[std::size_t(p)], v = cycle[std::size_t(r)], w = cycle[std::size_t(q)];
+          fresh.push_back({u, v, w, a});
+          fresh.push_back({u, v, w, b});
+          todo.push_back({p, r});
+          todo.push_back({r, q});
+        }
+        if (replace(ring, fresh)) {
+          ++*removals;
+          return true;
+        }
+      }
+    return false;
+  }
+
+  // The nodes of the ring around edge (a, b) in order (each element holds two neighbouring ones);
+  // shorter than the ring if they do not close into one cycle.
+  std::vector<int> ring_cycle(const std::vector<int>& ring, int a, int b) const {
+    std::vector<std::array<int, 2>> links;
+    for (int r : ring) {
+      std::array<int, 2> l{-1, -1};
+      int k = 0;
+      for (int v : tets_[r])
+        if (v != a && v != b && k < 2) l[std::size_t(k++)] = v;
+      links.push_back(l);
+    }
+    std::vector<int> cycle{links[0][0], links[0][1]};
+    std::vector<bool> used(links.size(), false);
+    used[0] = true;
+    while (cycle.size() < links.size()) {
+      bool grown = false;
+      for (std::size_t k = 0; k < links.size() && !grown; ++k)
+        if (!used[k] && (links[k][0] == cycle.back() || links[k][1] == cycle.back())) {
+          used[k] = true, grown = true;
+          cycle.push_back(links[k][0] == cycle.back() ? links[k][1] : links[k][0]);
+        }
+      if (!grown) break;
+    }
+    return cycle;
+  }
+
+  // A flat element whose two faces lie on one interface (a cap on it): it changes sides, so the
+  // interface takes its two other faces instead (an edge flip of the interface, which the element's
+  // flatness keeps within its fold), and the flips within its new region can then remove it.
+  // Undone if none can.
+  bool move_cap(int t, SliverRepair* report) {
+    if (!region_) return false;
+    const Tet e = tets_[t];
+    const int own = (*region_)[t];
+    int other_region = -1, count = 0;
+    std::array<int, 2> on{};  // the faces (by opposite vertex) on the interface
+    for (int f = 0; f < 4; ++f) {
+      const auto around = sharing({e[kFace[f][0]], e[kFace[f][1]], e[kFace[f][2]]});
+      if (around.size() != 2) return false;  // a face on the outer boundary: peeling's case
+      const int r = (*region_)[around[0] == t ? around[1] : around[0]];
+      if (r == own) continue;
+      if (count == 2 || (other_region >= 0 && r != other_region)) return false;
+      other_region = r, on[std::size_t(count++)] = f;
+    }
+    if (count != 2) return false;
+    // Dihedral angles in dihedral_angles_deg's order of face pairs (0,1) (0,2) (0,3) (1,2) (1,3) (2,3).
+    const auto pair_index = [](int f, int g) { return f == 0 ? g - 1 : f == 1 ? g + 1 : 5; };
+    const auto angles = dihedral_angles_deg(nodes_[e[0]], nodes_[e[1]], nodes_[e[2]], nodes_[e[3]]);
+    int rest[2], k = 0;
+    for (int f = 0; f < 4; ++f)
+      if (f != on[0] && f != on[1]) rest[k++] = f;
+    // The old crease (between the two interface faces) and the new one (between the other two):
+    // both within 30 degrees of flat.
+    if (angles[std::size_t(pair_index(on[0], on[1]))] < 150 || angles[std::size_t(pair_index(rest[0], rest[1]))] < 150)
+      return false;
+    const int b = e[std::size_t(on[0])], d = e[std::size_t(on[1])];  // the new crease's ends
+    if (edge_on_boundary(b, d)) return false;  // it would meet another surface
+    (*region_)[t] = other_region;
+    if (flip32(t, &report->flips32) || flip44(t, &report->flips44) || remove_edge(t, &report->edge_removals) ||
+        flip23(t, &report->flips23) || relocate(t)) {
+      ++report->caps_moved;
+      return true;
+    }
+    (*region_)[t] = own;
+    return false;
+  }
+
   // A node of the element moves towards where each of its elements would be regular on its
   // opposite face, as far as improves the worst angle around it. A node on the boundary moves only
   // in the plane tangent to the surface there, and only where the surface around it is nearly flat
@@ -418,7 +568,11 @@ SliverRepair repair_slivers(std::vector<Point3>& nodes, std::vector<Tet>& tets, 
       if (!mesh.alive(t) || mesh.quality(t) >= target_deg) continue;
       // Flips first (they keep the boundary), then moving a node, then peeling (which cuts a
       // little off the tissue).
-      if (mesh.flip32(t, &report.flips32) || mesh.flip23(t, &report.flips23)) {
+      // The 4-4 flips, edge removals and interface caps only where regions are given (the conforming
+      // mesher's repair): the other paths' meshes stay as they were.
+      if (mesh.flip32(t, &report.flips32) || (region && mesh.flip44(t, &report.flips44)) ||
+          (region && mesh.remove_edge(t, &report.edge_removals)) || mesh.flip23(t, &report.flips23) ||
+          (region && mesh.move_cap(t, &report))) {
         changed = true;
       } else if (mesh.relocate(t)) {
         ++report.relocated, changed = true;

@@ -66,7 +66,9 @@ double restore_volume(std::vector<Point3>& nodes, const std::vector<Tet>& tets, 
                       double floor_deg);
 
 struct SliverRepair {
-  int peeled = 0, flips23 = 0, flips32 = 0, relocated = 0;
+  int peeled = 0, flips23 = 0, flips32 = 0, flips44 = 0, relocated = 0;
+  int edge_removals = 0;  // rings of 5 to 7 elements around an edge retriangulated without it
+  int caps_moved = 0;  // flat elements on an interface moved to its other side (then flipped away)
   double peeled_volume = 0;  // the volume cut away by peeling
   double min_dihedral_before_deg = 0, min_dihedral_after_deg = 0;
 };

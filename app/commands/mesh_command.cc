@@ -215,6 +215,9 @@ int run_mesh(const MeshOptions& o) {
   json.key("peeled_volume_m3").value(mesh.repair.peeled_volume);
   json.key("flips23").value(mesh.repair.flips23);
   json.key("flips32").value(mesh.repair.flips32);
+  json.key("flips44").value(mesh.repair.flips44);
+  json.key("edge_removals").value(mesh.repair.edge_removals);
+  json.key("interface_caps_moved").value(mesh.repair.caps_moved);
   json.key("relocated").value(mesh.repair.relocated);
   json.end_object();
   json.key("surface_remeshed").value(mesh.surface_remeshed);
@@ -269,8 +272,9 @@ int run_mesh(const MeshOptions& o) {
     std::printf("  dihedral angles %.1f to %.1f deg, radius ratio from %.3f, %ld inverted, %ld degenerate\n",
                 q.min_dihedral_deg, q.max_dihedral_deg, q.min_radius_ratio, q.inverted, q.degenerate);
     const auto& r = mesh.repair;
-    std::printf("  sliver repair: smallest dihedral %.1f -> %.1f deg (%d peeled, %d 2-3 and %d 3-2 flips, %d nodes moved)\n",
-                r.min_dihedral_before_deg, r.min_dihedral_after_deg, r.peeled, r.flips23, r.flips32, r.relocated);
+    std::printf("  sliver repair: smallest dihedral %.1f -> %.1f deg (%d peeled, %d 2-3, %d 3-2 and %d 4-4 flips, %d edges removed, %d interface caps moved, %d nodes moved)\n",
+                r.min_dihedral_before_deg, r.min_dihedral_after_deg, r.peeled, r.flips23, r.flips32, r.flips44, r.edge_removals, r.caps_moved,
+                r.relocated);
     for (const auto& region : mesh.regions)
       std::printf("  region %s: %ld tetrahedra, %.4g ml against %.4g ml of voxels (%+.2f %%), smallest dihedral %.1f deg, %ld outer triangles\n",
                   region.name.c_str(), region.tetrahedra, region.volume_m3 * 1e6, region.voxel_volume_m3 * 1e6,

@@ -168,11 +168,12 @@ TEST(MeshCommand, ConformingRegionsOfThePhantomHaveSmoothInterfaces) {
   ASSERT_EQ(run_command(fetouch("phantom --no-speckle --fetus-offset 0 0 31 --out " + (dir / "phantom").string())).exit_code, 0);
   const auto r = run_command(fetouch("mesh " + (dir / "phantom" / "phantom_labels.mha").string() +
                                      " --regions wall=1 fluid=2 head=3,4 body=5,6 --surface conforming --size 8 "
-                                     "--region-size wall=6 --region-size head=4 --region-size body=3 --min-dihedral 5 --json --out " +
+                                     "--region-size wall=6 --region-size head=4 --region-size body=3 --json --out " +
                                      (dir / "anatomy.msh").string()));
-  ASSERT_EQ(r.exit_code, 0) << r.err;
+  ASSERT_EQ(r.exit_code, 0) << r.err;  // the default quality asked: smallest dihedral angle 10 degrees
   const YAML::Node j = YAML::Load(r.out);
   EXPECT_TRUE(j["closed_manifold"].as<bool>());
+  EXPECT_GE(j["quality"]["min_dihedral_deg"].as<double>(), 10);
   EXPECT_EQ(j["quality"]["inverted"].as<long>(), 0);
   ASSERT_EQ(j["surfaces"].size(), 6u);  // wall's outside and five interfaces
   for (const auto& surface : j["surfaces"]) {

@@ -279,5 +279,114 @@ TEST(RestoreVolume, AnIcosahedronGrowsToTheSpheresVolume) {
   EXPECT_NEAR(total_volume(kept, tets), 0.9 * v0, 1e-9);
 }
 
+// An n-gonal bipyramid: the regular n-gon on the unit circle in z = 0 (nodes 2..n+1), its first
+// node pulled to radius r, and apexes 0 and 1 at z = +-1; n elements around the axis 0-1, the two
+// beside the pulled node flat (a sliver each).
+void pulled_ring(int n, double r, std::vector<Point3>& nodes, std::vector<Tet>& tets) {
+  nodes = {{0, 0, 1}, {0, 0, -1}};
+  tets.clear();
+  for (int k = 0; k < n; ++k) nodes.push_back({std::cos(2 * M_PI * k / n), std::sin(2 * M_PI * k / n), 0});
+  nodes[2] = {r, 0, 0};
+  for (int k = 0; k < n; ++k) tets.push_back({0, 1, 2 + k, 2 + (k + 1) % n});
+  orient(nodes, tets);
+}
+
+TEST(SliverRepair, RingsOfFourToSevenAroundAnEdgeLoseIt) {
+  // Without the axis, 2 (n - 2) elements over a triangulation of the ring (a 4-4 flip for n = 4,
+  // an edge removal above). Region-aware repair only (the other paths' meshes are kept as they
+  // were). The volume is 2/3 times the ring polygon's area (the shoelace formula).
+  for (int n = 4; n <= 7; ++n) {
+    SCOPED_TRACE(n);
+    std::vector<Point3> nodes;
+    std::vector<Tet> tets;
+    pulled_ring(n, 0.1, nodes, tets);
+    double area = 0;
+    for (int k = 0; k < n; ++k) {
+      const Point3 &p = nodes[std::size_t(2 + k)], &q = nodes[std::size_t(2 + (k + 1) % n)];
+      area += 0.5 * (p[0] * q[1] - q[0] * p[1]);
+    }
+    std::vector<int> region(tets.size(), 0);
+    const auto faces = sorted_faces(tets);
+    ASSERT_LT(worst(nodes, tets), 10);
+    const SliverRepair r = repair_slivers(nodes, tets, 10, &region);
+    EXPECT_EQ(n == 4 ? r.flips44 : r.edge_removals, 1);
+    EXPECT_EQ(r.peeled, 0);
+    ASSERT_EQ(tets.size(), std::size_t(2 * (n - 2)));
+    ASSERT_EQ(region.size(), tets.size());
+    for (const Tet& t : tets) EXPECT_FALSE(std::count(t.begin(), t.end(), 0) && std::count(t.begin(), t.end(), 1));
+    EXPECT_NEAR(total_volume(nodes, tets), 2.0 / 3 * area, 1e-12);
+    EXPECT_EQ(sorted_faces(tets), faces);
+    EXPECT_GT(worst(nodes, tets), 10);
+
+    // Without regions no 4-4 flip or edge removal (the restricted and contoured paths' repair is
+    // unchanged).
+    pulled_ring(n, 0.1, nodes, tets);
+    const SliverRepair plain = repair_slivers(nodes, tets, 10);
+    EXPECT_EQ(plain.flips44 + plain.edge_removals, 0);
+  }
+}
+
+TEST(SliverRepair, AFlatCapOnAnInterfaceChangesSidesAndIsFlippedAway) {
+  // The unit square at z = 0 with corners 1 and 3 raised by eps. Below, region 1 (two elements to
+  // S) meets region 0 along the valley 0-2; a flat cap (0, 1, 2, 3) in region 0 fills the fold up
+  // to the ridge 1-3, under a fan of seven region-0 elements around the ridge (eight around it with
+  // the cap: no flip in region 0 removes the cap). The cap moves to region 1, whose 3-2 flip around
+  // the valley removes it: the interface becomes the ridge's two triangles.
+  const double eps = 0.02;
+  std::vector<Point3> nodes{{0, 0, 0}, {1, 0, eps}, {1, 1, 0}, {0, 1, eps}, {0.5, 0.5, -1}};
+  const int S = 4;
+  std::vector<Tet> tets{{0, 1, 2, 3}, {0, 1, 2, S}, {0, 2, 3, S}};
+  std::vector<int> region{0, 1, 1};
+  std::vector<int> arc{0};  // around the ridge from node 0 over the top to node 2
+  const double R = std::sqrt(0.5);
+  for (int i = 1; i < 7; ++i) {
+    const double th = M_PI * i / 7;
+    nodes.push_back({0.5 - R * std::cos(th) / std::sqrt(2.0), 0.5 - R * std::cos(th) / std::sqrt(2.0), eps + R * std::sin(th)});
+    arc.push_back(static_cast<int>(nodes.size()) - 1);
+  }
+  arc.push_back(2);
+  for (std::size_t i = 0; i + 1 < arc.size(); ++i) tets.push_back({1, 3, arc[i], arc[i + 1]}), region.push_back(0);
+  orient(nodes, tets);
+  ASSERT_TRUE(boundary_is_closed_manifold(tets));
+  for (std::size_t t = 1; t < tets.size(); ++t) ASSERT_GT(min_dihedral_deg(nodes, tets[t]), 10);
+  ASSERT_LT(min_dihedral_deg(nodes, tets[0]), 5);
+  const double volume = total_volume(nodes, tets);
+  const auto faces = sorted_faces(tets);
+  double over = 0;  // region 0 without the cap
+  for (std::size_t t = 3; t < tets.size(); ++t) over += tet_signed_volume(nodes[tets[t][0]], nodes[tets[t][1]], nodes[tets[t][2]], nodes[tets[t][3]]);
+
+  const SliverRepair r = repair_slivers(nodes, tets, 10, &region);
+  EXPECT_EQ(r.caps_moved, 1);
+  EXPECT_EQ(r.flips32, 1);
+  EXPECT_EQ(r.peeled, 0);
+  ASSERT_EQ(tets.size(), 9u);
+  EXPECT_EQ(sorted_faces(tets), faces);
+  EXPECT_NEAR(total_volume(nodes, tets), volume, 1e-14);
+  EXPECT_GT(worst(nodes, tets), 10);
+  // Region 1 is what lies under the ridge: the pyramid from S over the raised square, as the two
+  // halves of the square along the ridge.
+  const double under_ridge = std::abs(tet_signed_volume(nodes[0], nodes[1], nodes[3], nodes[S])) +
+                             std::abs(tet_signed_volume(nodes[1], nodes[2], nodes[3], nodes[S]));
+  double in[2] = {0, 0};
+  for (std::size_t t = 0; t < tets.size(); ++t)
+    in[region[t]] += tet_signed_volume(nodes[tets[t][0]], nodes[tets[t][1]], nodes[tets[t][2]], nodes[tets[t][3]]);
+  EXPECT_NEAR(in[1], under_ridge, 1e-14);
+  EXPECT_NEAR(in[0], over, 1e-14);
+  // The faces between the regions: the ridge's triangles (0, 1, 3) and (1, 2, 3).
+  std::set<Triangle> interface;
+  for (std::size_t t = 0; t < tets.size(); ++t)
+    for (std::size_t q = t + 1; q < tets.size(); ++q) {
+      if (region[t] == region[q]) continue;
+      std::vector<int> common;
+      for (int v : tets[t])
+        if (std::count(tets[q].begin(), tets[q].end(), v)) common.push_back(v);
+      if (common.size() == 3) {
+        std::sort(common.begin(), common.end());
+        interface.insert({common[0], common[1], common[2]});
+      }
+    }
+  EXPECT_EQ(interface, (std::set<Triangle>{{0, 1, 3}, {1, 2, 3}}));
+}
+
 }  // namespace
 }  // namespace fetouch::meshes
