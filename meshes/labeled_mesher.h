@@ -14,14 +14,14 @@
 //      of these grown by `grading` millimetres per millimetre of distance (a chamfer sweep), so
 //      elements grade smoothly from a fine region or ball into the coarse ones around it.
 //   3. Delaunay refinement (Boissonnat and Oudot's surface criteria: triangles of at least 25
-//      degrees, circumradius under the size, circumcentre within 4 % of the size of the surface,
-//      between a tenth of a voxel and `surface_distance_mm`; cells of radius-edge ratio under 3),
+//      degrees, circumradius under the size, circumcentre within 3 % of the size of the surface,
+//      between a twentieth of a voxel and `surface_distance_mm`; cells of radius-edge ratio under 3),
 //      every connected piece of every region seeded. Three meshes: the first finds the curves where
 //      three regions meet (the background counted), which the others keep as features (chained and
 //      smoothed); the second measures each region's volume and area, from which each region's
-//      indicator gets a bias that gives it its voxels' volume; the third is kept. Then sliver
-//      perturbation and exudation (bound 15 degrees) and the region-aware sliver repair
-//      (meshes/tet_repair.h).
+//      indicator gets a bias that gives it its voxels' volume; the third is kept. Then five Lloyd
+//      iterations, sliver perturbation and exudation (bound 15 degrees) and the region-aware
+//      sliver repair (meshes/tet_repair.h).
 //   4. Each cell takes the region of its subdomain; the faces between regions are the interfaces
 //      (VolumeMesh::interfaces), the faces on the background the boundary; the report gives every
 //      surface's smoothness and distance to its labels (meshes/interface_quality.h).

@@ -8,7 +8,13 @@
 //   - peeling: a sliver with two or three faces on the boundary is cut away (the boundary then
 //     runs along its other faces; the volume lost is the sliver's, which is nearly nothing);
 //   - flips: 2-3 (two elements sharing an interior face become three around a new edge) and 3-2
-//     (three elements around an interior edge become two);
+//     (three elements around an interior edge become two); with regions also 4-4 (four around an
+//     edge become four around a diagonal of their ring) and edge removal (rings of 5 to 7 around
+//     an edge retriangulated without it, the best triangulation of the ring found by dynamic
+//     programming);
+//   - with regions, a flat cap on an interface (two of its faces on it, folded by under 30 degrees)
+//     changes sides when a flip in the region across then removes it (the interface takes its other
+//     two faces: an edge flip of the interface);
 //   - relocation: an interior node of a sliver moves towards where its elements would be
 //     regular, if the worst angle around it improves.
 #pragma once
