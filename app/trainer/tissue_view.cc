@@ -12,6 +12,7 @@
 #include <vtkPoints.h>
 #include <vtkPolyData.h>
 #include <vtkPolyDataMapper.h>
+#include <vtkPolyDataNormals.h>
 #include <vtkProperty.h>
 #include <vtkRenderer.h>
 #include <vtkScalarBarActor.h>
@@ -21,6 +22,8 @@
 #include <algorithm>
 #include <cmath>
 #include <map>
+#include <set>
+#include <string>
 
 namespace fetouch::app::trainer {
 
@@ -50,6 +53,35 @@ vtkSmartPointer<vtkPolyData> triangles(vtkPoints* points, const std::vector<std:
   return data;
 }
 
+// Point normals for shading that reads as a smooth surface (Gouraud), split where neighbouring
+// triangles fold by more than 60 degrees (a junction of three surfaces stays a crease).
+vtkSmartPointer<vtkPolyDataNormals> smooth_normals(vtkPolyData* data) {
+  auto normals = vtkSmartPointer<vtkPolyDataNormals>::New();
+  normals->SetInputData(data);
+  normals->SetFeatureAngle(60);
+  normals->SplittingOn();
+  normals->ConsistencyOff();  // the triangles are oriented out of their region already
+  normals->AutoOrientNormalsOff();
+  normals->ComputePointNormalsOn();
+  normals->ComputeCellNormalsOff();
+  return normals;
+}
+
+double tet_volume(const MeshView& mesh, const std::array<unsigned int, 4>& t) {
+  const auto& a = mesh.points[t[0]];
+  double e[3][3];
+  for (int k = 0; k < 3; ++k)
+    for (int c = 0; c < 3; ++c) e[k][c] = mesh.points[t[std::size_t(k + 1)]][std::size_t(c)] - a[std::size_t(c)];
+  return (e[0][0] * (e[1][1] * e[2][2] - e[1][2] * e[2][1]) - e[0][1] * (e[1][0] * e[2][2] - e[1][2] * e[2][0]) +
+          e[0][2] * (e[1][0] * e[2][1] - e[1][1] * e[2][0])) / 6;
+}
+
+// The face (sorted or not) ordered so that its normal (b - a) x (c - a) points away from `apex`.
+std::array<unsigned int, 3> facing_away(const MeshView& mesh, std::array<unsigned int, 3> f, unsigned int apex) {
+  if (tet_volume(mesh, {f[0], f[1], f[2], apex}) > 0) std::swap(f[1], f[2]);
+  return f;
+}
+
 }  // namespace
 
 TissueView::TissueView(vtkRenderer* renderer, const MeshView& mesh, const std::vector<double>& probe_radii_m)
@@ -58,25 +90,59 @@ TissueView::TissueView(vtkRenderer* renderer, const MeshView& mesh, const std::v
   points_->SetDataTypeToDouble();
   points_->SetNumberOfPoints(static_cast<vtkIdType>(mesh.points.size()));
   for (std::size_t i = 0; i < mesh.points.size(); ++i) points_->SetPoint(static_cast<vtkIdType>(i), mesh.points[i].data());
-  // Interfaces: faces of two tetrahedra of different regions.
-  std::map<std::array<unsigned int, 3>, std::pair<std::size_t, int>> faces;  // sorted face -> first holder, count
-  std::vector<std::array<unsigned int, 3>> inner;
-  std::vector<unsigned int> inner_cell;
+  // Interfaces: faces of two tetrahedra of different regions. Each is drawn once, by the smaller of
+  // its two regions (the one inside: the fetus in the fluid, the fluid's wall side by the wall), and
+  // oriented out of it; a region hidden shows what it covered.
+  std::map<unsigned int, double> region_volume;
+  for (std::size_t t = 0; t < mesh.tetrahedra.size(); ++t) region_volume[mesh.material[t]] += std::abs(tet_volume(mesh, mesh.tetrahedra[t]));
+  const auto owns = [&](unsigned int m, unsigned int other) {
+    return region_volume[m] < region_volume[other] || (region_volume[m] == region_volume[other] && m > other);
+  };
+  std::map<std::array<unsigned int, 3>, std::size_t> first_holder;  // sorted face -> tetrahedron
+  std::map<unsigned int, std::size_t> layer_of;                     // material -> layer
   static constexpr int kFace[4][3] = {{1, 2, 3}, {0, 2, 3}, {0, 1, 3}, {0, 1, 2}};
+  const auto apex_of = [&](std::size_t t, const std::array<unsigned int, 3>& key) {
+    for (unsigned int v : mesh.tetrahedra[t])
+      if (v != key[0] && v != key[1] && v != key[2]) return v;
+    return mesh.tetrahedra[t][0];
+  };
   for (std::size_t t = 0; t < mesh.tetrahedra.size(); ++t)
     for (const auto& f : kFace) {
       std::array<unsigned int, 3> key = {mesh.tetrahedra[t][f[0]], mesh.tetrahedra[t][f[1]], mesh.tetrahedra[t][f[2]]};
       std::sort(key.begin(), key.end());
-      auto [at, fresh] = faces.emplace(key, std::make_pair(t, 1));
+      auto [at, fresh] = first_holder.emplace(key, t);
       if (fresh) continue;
-      if (mesh.material[at->second.first] != mesh.material[t]) {
-        inner.push_back(key);
-        inner_cell.push_back(mesh.tetrahedron_cell[t]);
+      const std::size_t other = at->second;
+      if (mesh.material[other] == mesh.material[t]) continue;
+      const std::size_t owner = owns(mesh.material[t], mesh.material[other]) ? t : other;
+      const std::size_t across = owner == t ? other : t;
+      const unsigned int m = mesh.material[owner];
+      auto [slot, added] = layer_of.emplace(m, layers_.size());
+      if (added) {
+        RegionLayer layer;
+        layer.material = m;
+        const auto named = mesh.region_name.find(m);
+        layer.name = named != mesh.region_name.end() ? named->second : "region " + std::to_string(m);
+        layers_.push_back(std::move(layer));
       }
+      RegionLayer& layer = layers_[slot->second];
+      layer.triangles.push_back(facing_away(mesh, key, apex_of(owner, key)));
+      layer.across.push_back(mesh.material[across]);
+      layer.cells.push_back(mesh.tetrahedron_cell[owner]);
+      ++interfaces_;
     }
-  interfaces_ = inner.size();
-  triangle_cell_ = mesh.boundary_triangle_cell;
-  triangle_cell_.insert(triangle_cell_.end(), inner_cell.begin(), inner_cell.end());
+  std::sort(layers_.begin(), layers_.end(), [](const RegionLayer& x, const RegionLayer& y) { return x.material < y.material; });
+  // The outer surface, oriented outwards (the element under each triangle found by its face).
+  std::vector<std::array<unsigned int, 3>> outer = mesh.boundary_triangles;
+  std::set<unsigned int> outside;  // the regions on the outer surface (the wall)
+  for (auto& f : outer) {
+    std::array<unsigned int, 3> key = f;
+    std::sort(key.begin(), key.end());
+    const auto holder = first_holder.find(key);
+    if (holder == first_holder.end()) continue;
+    f = facing_away(mesh, f, apex_of(holder->second, key));
+    outside.insert(mesh.material[holder->second]);
+  }
 
   magnitude_ = vtkSmartPointer<vtkFloatArray>::New();
   magnitude_->SetName("displacement_mm");
@@ -86,36 +152,41 @@ TissueView::TissueView(vtkRenderer* renderer, const MeshView& mesh, const std::v
   lookup_->SetHueRange(0.667, 0.0);  // blue (rest) to red
   lookup_->Build();
 
-  surface_ = triangles(points_, mesh.boundary_triangles);
+  surface_ = triangles(points_, outer);
   surface_->GetPointData()->SetScalars(magnitude_);
   stress_ = vtkSmartPointer<vtkFloatArray>::New();
   stress_->SetName("von_mises_kpa");
   stress_->SetNumberOfTuples(static_cast<vtkIdType>(mesh.boundary_triangles.size()));
   stress_->Fill(0);
   surface_->GetCellData()->SetScalars(stress_);
+  surface_normals_ = smooth_normals(surface_);
   surface_mapper_ = vtkSmartPointer<vtkPolyDataMapper>::New();
-  surface_mapper_->SetInputData(surface_);
+  surface_mapper_->SetInputConnection(surface_normals_->GetOutputPort());
   surface_mapper_->SetLookupTable(lookup_);
   surface_mapper_->SetScalarModeToUsePointData();
   surface_actor_ = vtkSmartPointer<vtkActor>::New();
   surface_actor_->SetMapper(surface_mapper_);
   surface_actor_->GetProperty()->BackfaceCullingOff();
   renderer_->AddActor(surface_actor_);
-  if (interfaces_ > 0) {
-    surface_actor_->GetProperty()->SetOpacity(0.3);  // the wall, see-through: the inner structures show
-    inner_ = triangles(points_, inner);
-    inner_->GetPointData()->SetScalars(magnitude_);
-    auto inner_stress = vtkSmartPointer<vtkFloatArray>::New();
-    inner_stress->SetNumberOfTuples(static_cast<vtkIdType>(inner.size()));
-    inner_stress->Fill(0);
-    inner_->GetCellData()->SetScalars(inner_stress);
-    inner_mapper_ = vtkSmartPointer<vtkPolyDataMapper>::New();
-    inner_mapper_->SetInputData(inner_);
-    inner_mapper_->SetLookupTable(lookup_);
-    inner_mapper_->SetScalarModeToUsePointData();
-    inner_actor_ = vtkSmartPointer<vtkActor>::New();
-    inner_actor_->SetMapper(inner_mapper_);
-    renderer_->AddActor(inner_actor_);
+  if (interfaces_ > 0) surface_actor_->GetProperty()->SetOpacity(0.3);  // the wall, see-through: the inner structures show
+  for (RegionLayer& layer : layers_) {
+    layer.data = triangles(points_, layer.triangles);
+    layer.data->GetPointData()->SetScalars(magnitude_);
+    layer.stress = vtkSmartPointer<vtkFloatArray>::New();
+    layer.stress->SetNumberOfTuples(static_cast<vtkIdType>(layer.triangles.size()));
+    layer.stress->Fill(0);
+    layer.data->GetCellData()->SetScalars(layer.stress);
+    layer.normals = smooth_normals(layer.data);
+    layer.mapper = vtkSmartPointer<vtkPolyDataMapper>::New();
+    layer.mapper->SetInputConnection(layer.normals->GetOutputPort());
+    layer.mapper->SetLookupTable(lookup_);
+    layer.mapper->SetScalarModeToUsePointData();
+    layer.actor = vtkSmartPointer<vtkActor>::New();
+    layer.actor->SetMapper(layer.mapper);
+    layer.actor->GetProperty()->BackfaceCullingOff();
+    // A region on the outer surface draws its inner side as see-through as its outer one.
+    if (outside.count(layer.material)) layer.actor->GetProperty()->SetOpacity(0.3);
+    renderer_->AddActor(layer.actor);
   }
   bar_ = vtkSmartPointer<vtkScalarBarActor>::New();
   bar_->SetLookupTable(lookup_);
@@ -169,23 +240,24 @@ void TissueView::update_tissue(const TissueSnapshot& s, ColourField field) {
   const bool stress = field == ColourField::von_mises && s.von_mises.size() == mesh_.cells;
   if (stress) {
     float top = 0;
-    const std::size_t outer = mesh_.boundary_triangles.size();
-    auto* inner = inner_ ? vtkFloatArray::SafeDownCast(inner_->GetCellData()->GetScalars()) : nullptr;
-    for (std::size_t t = 0; t < triangle_cell_.size(); ++t) {
-      const float kpa = 1e-3f * static_cast<float>(s.von_mises[triangle_cell_[t]]);
+    const auto kpa_of = [&](unsigned int cell) {
+      const float kpa = 1e-3f * static_cast<float>(s.von_mises[cell]);
       top = std::max(top, kpa);
-      if (t < outer)
-        stress_->SetValue(static_cast<vtkIdType>(t), kpa);
-      else if (inner)
-        inner->SetValue(static_cast<vtkIdType>(t - outer), kpa);
-    }
+      return kpa;
+    };
+    for (std::size_t t = 0; t < mesh_.boundary_triangle_cell.size(); ++t)
+      stress_->SetValue(static_cast<vtkIdType>(t), kpa_of(mesh_.boundary_triangle_cell[t]));
     stress_->Modified();
-    if (inner) inner->Modified();
+    for (RegionLayer& layer : layers_) {
+      for (std::size_t t = 0; t < layer.cells.size(); ++t) layer.stress->SetValue(static_cast<vtkIdType>(t), kpa_of(layer.cells[t]));
+      layer.stress->Modified();
+    }
     largest = top;
   }
   const bool cells = stress;
-  for (auto* mapper : {surface_mapper_.Get(), inner_mapper_.Get()}) {
-    if (!mapper) continue;
+  std::vector<vtkPolyDataMapper*> mappers{surface_mapper_.Get()};
+  for (RegionLayer& layer : layers_) mappers.push_back(layer.mapper.Get());
+  for (auto* mapper : mappers) {
     if (cells)
       mapper->SetScalarModeToUseCellData();
     else
@@ -195,7 +267,19 @@ void TissueView::update_tissue(const TissueSnapshot& s, ColourField field) {
   }
   bar_->SetTitle(cells ? "von Mises (kPa)" : "|u| (mm)");
   surface_->Modified();
-  if (inner_) inner_->Modified();
+  for (RegionLayer& layer : layers_) layer.data->Modified();
+}
+
+void TissueView::set_region_visible(std::size_t i, bool on) {
+  if (i < layers_.size()) layers_[i].actor->SetVisibility(on);
+}
+
+bool TissueView::region_visible(std::size_t i) const { return i < layers_.size() && layers_[i].actor->GetVisibility(); }
+
+vtkPolyData* TissueView::drawn_region(std::size_t i) {
+  if (i >= layers_.size()) return nullptr;
+  layers_[i].normals->Update();
+  return layers_[i].normals->GetOutput();
 }
 
 void TissueView::update_probes(const std::array<SessionMonitor::ProbeTick, SessionMonitor::kMaxDevices>& probes, int count) {

@@ -1,6 +1,7 @@
 // The trainer's 3D view (VTK, no Qt): the deformed tissue's surface coloured by displacement
 // magnitude or von Mises stress with a colour bar, the outer wall see-through where the scene has
-// inner structures (their interfaces drawn opaque), and per probe the tool at the device point, its
+// inner structures (their interfaces drawn opaque, region by region, each one shown or hidden;
+// every surface shaded with point normals, split where it folds by over 60 degrees), and per probe the tool at the device point, its
 // proxy on the surface and its force as an arrow; the mouse cursor when the mouse drives a probe.
 #pragma once
 
@@ -8,6 +9,7 @@
 #include <vtkSmartPointer.h>
 
 #include <array>
+#include <string>
 #include <vector>
 
 #include "app/session.h"
@@ -21,6 +23,7 @@ class vtkPolyDataMapper;
 class vtkActor;
 class vtkScalarBarActor;
 class vtkLookupTable;
+class vtkPolyDataNormals;
 
 namespace fetouch::app::trainer {
 
@@ -38,20 +41,44 @@ class TissueView {
   void reset_camera();
   bool has_inner_structures() const { return interfaces_ > 0; }
 
+  // The regions that draw interfaces: each draws the faces it shares with a larger region (the
+  // one around it), oriented out of it.
+  std::size_t regions() const { return layers_.size(); }
+  const std::string& region_name(std::size_t i) const { return layers_[i].name; }
+  void set_region_visible(std::size_t i, bool on);
+  bool region_visible(std::size_t i) const;
+  // What region i draws: its triangles (node indices) and the material across each, and the
+  // polydata as drawn (deformed points, split normals).
+  const std::vector<std::array<unsigned int, 3>>& region_triangles(std::size_t i) const { return layers_[i].triangles; }
+  const std::vector<unsigned int>& region_across(std::size_t i) const { return layers_[i].across; }
+  vtkPolyData* drawn_region(std::size_t i);
+
  private:
   struct ProbeActors {
     vtkSmartPointer<vtkActor> tool, proxy, arrow;
   };
+  struct RegionLayer {
+    std::string name;
+    unsigned int material = 0;
+    std::vector<std::array<unsigned int, 3>> triangles;
+    std::vector<unsigned int> across, cells;  // per triangle: the material across, the solver's cell
+    vtkSmartPointer<vtkPolyData> data;
+    vtkSmartPointer<vtkFloatArray> stress;
+    vtkSmartPointer<vtkPolyDataNormals> normals;
+    vtkSmartPointer<vtkPolyDataMapper> mapper;
+    vtkSmartPointer<vtkActor> actor;
+  };
   vtkRenderer* renderer_;
   const MeshView& mesh_;
   vtkSmartPointer<vtkPoints> points_;
-  vtkSmartPointer<vtkPolyData> surface_, inner_;
+  vtkSmartPointer<vtkPolyData> surface_;
+  vtkSmartPointer<vtkPolyDataNormals> surface_normals_;
   vtkSmartPointer<vtkFloatArray> magnitude_, stress_;
-  vtkSmartPointer<vtkPolyDataMapper> surface_mapper_, inner_mapper_;
+  vtkSmartPointer<vtkPolyDataMapper> surface_mapper_;
   vtkSmartPointer<vtkLookupTable> lookup_;
   vtkSmartPointer<vtkScalarBarActor> bar_;
-  vtkSmartPointer<vtkActor> surface_actor_, inner_actor_, cursor_;
-  std::vector<unsigned int> triangle_cell_;  // the cell of each drawn triangle (outer, then inner)
+  vtkSmartPointer<vtkActor> surface_actor_, cursor_;
+  std::vector<RegionLayer> layers_;
   std::vector<ProbeActors> probes_;
   std::size_t interfaces_ = 0;
   ColourField field_ = ColourField::displacement;

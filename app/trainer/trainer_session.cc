@@ -60,6 +60,8 @@ TrainerSession::TrainerSession(const config::Scene& scene, const TrainerOptions&
     mesh_.boundary_triangles = std::move(d.boundary_triangles);
     mesh_.boundary_triangle_cell = std::move(d.boundary_triangle_cell);
     mesh_.cells = solver.cells();
+    for (const auto& region : model->mesh.regions)
+      mesh_.region_name[region.material_id] = region.name.empty() ? "region " + std::to_string(region.material_id) : region.name;
   }
   // The devices, and where each one's contact patch starts.
   long ticks = -1;

@@ -13,6 +13,7 @@
 
 #include <atomic>
 #include <filesystem>
+#include <map>
 #include <memory>
 #include <mutex>
 #include <optional>
@@ -56,6 +57,7 @@ struct MeshView {
   std::vector<std::array<unsigned int, 3>> boundary_triangles;
   std::vector<unsigned int> boundary_triangle_cell;
   unsigned int cells = 0;
+  std::map<unsigned int, std::string> region_name;  // by material id (empty names: "region N")
 };
 
 class TrainerSession {

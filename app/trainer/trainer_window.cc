@@ -134,6 +134,9 @@ TrainerWindow::TrainerWindow(const config::Scene& scene, const TrainerOptions& s
     ask_mode(asked_model_, asked_hold_ == haptics::HoldKind::zoh ? haptics::HoldKind::foh : haptics::HoldKind::zoh);
   });
   action("Quit", QKeySequence(Qt::CTRL | Qt::Key_Q), [this] { close(); });
+  addToolBarBreak();
+  regions_bar_ = addToolBar("regions");
+  regions_bar_->setToolTip("show or hide each region's surfaces");
 
   resize(1280, 800);
   start_take(std::nullopt);
@@ -141,6 +144,23 @@ TrainerWindow::TrainerWindow(const config::Scene& scene, const TrainerOptions& s
   connect(timer_, &QTimer::timeout, this, [this] { tick(); });
   timer_->start(30);
   started_ = rate_from_ = std::chrono::steady_clock::now();
+}
+
+bool TrainerWindow::set_region_visible(const std::string& name, bool on) {
+  if (on)
+    hidden_regions_.erase(name);
+  else
+    hidden_regions_.insert(name);
+  bool found = false;
+  for (std::size_t i = 0; view_ && i < view_->regions(); ++i)
+    if (view_->region_name(i) == name) view_->set_region_visible(i, on), found = true;
+  for (QAction* a : regions_bar_->actions())
+    if (a->text().toStdString() == name && a->isChecked() != on) {
+      const QSignalBlocker quiet(a);
+      a->setChecked(on);
+    }
+  if (found) render_window_->Render();
+  return found;
 }
 
 TrainerWindow::~TrainerWindow() {
@@ -191,6 +211,16 @@ void TrainerWindow::start_take(const std::optional<std::filesystem::path>& recor
   }
   view_->update_tissue(shown_, field_);
   view_->show_cursor(session_->cursor() != nullptr, cursor_);
+  regions_bar_->clear();
+  for (std::size_t i = 0; i < view_->regions(); ++i) {
+    const std::string name = view_->region_name(i);
+    QAction* a = regions_bar_->addAction(QString::fromStdString(name));
+    a->setCheckable(true);
+    a->setChecked(!hidden_regions_.count(name));
+    a->setToolTip(QString::fromStdString("show or hide the surfaces of " + name));
+    view_->set_region_visible(i, a->isChecked());
+    connect(a, &QAction::toggled, this, [this, name](bool on) { set_region_visible(name, on); });
+  }
   reset_camera();
   std::string text;
   for (const auto& m : messages) text += m + "  ";

@@ -10,6 +10,7 @@
 #include <filesystem>
 #include <memory>
 #include <optional>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -19,6 +20,7 @@
 #include "app/trainer/ultrasound_imager.h"
 
 class QComboBox;
+class QToolBar;
 class QLabel;
 class QTimer;
 class QVTKOpenGLNativeWidget;
@@ -84,6 +86,10 @@ class TrainerWindow : public QMainWindow {
   const TissueSnapshot& shown() const { return shown_; }  // the tissue state on screen
   const Eigen::Vector3d& cursor() const { return cursor_; }
   void set_cursor(const Eigen::Vector3d& at);  // the mouse cursor's place (a mouse probe follows it)
+  // The 3D view (null while no session runs) and the toolbar's region toggles: hiding a region shows
+  // what its surfaces covered; kept across takes and scenes by name. False: no such region.
+  TissueView* view() { return view_.get(); }
+  bool set_region_visible(const std::string& name, bool on);
 
  protected:
   bool eventFilter(QObject* watched, QEvent* event) override;
@@ -115,6 +121,8 @@ class TrainerWindow : public QMainWindow {
   std::filesystem::path scene_path_;
   QTimer* timer_ = nullptr;
   QComboBox *model_box_ = nullptr, *hold_box_ = nullptr;
+  QToolBar* regions_bar_ = nullptr;
+  std::set<std::string> hidden_regions_;
   haptics::LocalModelKind model_ = haptics::LocalModelKind::pi;
   haptics::HoldKind hold_ = haptics::HoldKind::zoh;
   haptics::LocalModelKind asked_model_ = haptics::LocalModelKind::pi;  // the newest asked (the mode in force when

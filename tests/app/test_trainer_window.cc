@@ -9,6 +9,8 @@
 #include <QSurfaceFormat>
 #include <QTest>
 #include <QVTKOpenGLNativeWidget.h>
+#include <vtkPointData.h>
+#include <vtkPolyData.h>
 #include <yaml-cpp/yaml.h>
 
 #include <algorithm>
@@ -16,6 +18,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <map>
 #include <filesystem>
 #include <fstream>
 #include <memory>
@@ -24,7 +27,9 @@
 
 #include "app/recording.h"
 #include "app/scene_mesh.h"
+#include "app/trainer/tissue_view.h"
 #include "app/trainer/trainer_window.h"
+#include "meshes/interface_quality.h"
 #include "tests/support/run_command.h"
 
 namespace fetouch::testing {
@@ -69,6 +74,70 @@ class TrainerWindowTest : public ::testing::Test {
   }
   fs::path out_;
 };
+
+double percentile(std::vector<double> v, double q) {
+  if (v.empty()) return 0;
+  std::sort(v.begin(), v.end());
+  return v[std::size_t(q * double(v.size() - 1) + 0.5)];
+}
+
+TEST_F(TrainerWindowTest, InterfacesAreDrawnSmoothRegionByRegionAndEachCanBeHidden) {
+  // What the 3D view draws between regions, per region and per region across: the angle between
+  // neighbouring drawn triangles' normal lines (meshes/interface_quality.h, on the triangles the
+  // view draws). The conforming scene's are within the mesher's bounds (median <= 10, 99th
+  // percentile <= 35 degrees); the default scene's voted regions, drawn the same way, are a
+  // staircase (median over 30 degrees on its largest interface), so the measure tells them apart.
+  app::trainer::WindowOptions options;
+  options.out = out_;
+  for (const std::string file : {"fetus_phantom_conforming.yaml", "fetus_phantom.yaml"}) {
+    SCOPED_TRACE(file);
+    const bool conforming = file == "fetus_phantom_conforming.yaml";
+    TrainerWindow w(scene(file), {}, options);
+    w.show();
+    ASSERT_TRUE(w.session());
+    app::trainer::TissueView* view = w.view();
+    ASSERT_TRUE(view);
+    ASSERT_GE(view->regions(), 3u);  // the fluid, the head and the body draw what they share with larger regions
+    const auto& points = w.session()->mesh().points;
+    double largest_median = 0;
+    std::size_t largest = 0;
+    for (std::size_t i = 0; i < view->regions(); ++i) {
+      const auto& drawn = view->region_triangles(i);
+      const auto& across = view->region_across(i);
+      ASSERT_EQ(drawn.size(), across.size());
+      vtkPolyData* data = view->drawn_region(i);
+      ASSERT_TRUE(data);
+      EXPECT_EQ(data->GetNumberOfPolys(), static_cast<vtkIdType>(drawn.size()));
+      EXPECT_TRUE(data->GetPointData()->GetNormals()) << "shaded with point normals";
+      std::map<unsigned int, std::vector<std::array<int, 3>>> by_across;
+      for (std::size_t t = 0; t < drawn.size(); ++t)
+        by_across[across[t]].push_back({int(drawn[t][0]), int(drawn[t][1]), int(drawn[t][2])});
+      for (const auto& [other, triangles] : by_across) {
+        const std::vector<double> angles = meshes::neighbour_normal_angles_deg(points, triangles);
+        const double median = percentile(angles, 0.5), p99 = percentile(angles, 0.99);
+        SCOPED_TRACE(view->region_name(i) + " against material " + std::to_string(other));
+        if (conforming) {
+          EXPECT_LE(median, 10);
+          EXPECT_LE(p99, 35);
+        }
+        if (triangles.size() > largest) largest = triangles.size(), largest_median = median;
+      }
+    }
+    if (!conforming) {
+      EXPECT_GT(largest_median, 30) << "the voted regions' interfaces are a staircase";
+    }
+
+    // Each region's toggle hides its surfaces and shows them again; an unknown name is refused.
+    const std::string name = view->region_name(0);
+    EXPECT_TRUE(w.set_region_visible(name, false));
+    EXPECT_FALSE(view->region_visible(0));
+    EXPECT_TRUE(view->region_visible(1));
+    EXPECT_TRUE(w.save_screenshot(out_ / ("hidden-" + file + ".png")));
+    EXPECT_TRUE(w.set_region_visible(name, true));
+    EXPECT_TRUE(view->region_visible(0));
+    EXPECT_FALSE(w.set_region_visible("no such region", false));
+  }
+}
 
 TEST_F(TrainerWindowTest, PauseStopsTimeResetReturnsToRestRecordReplays) {
   app::trainer::WindowOptions options;
