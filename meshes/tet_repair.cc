@@ -193,7 +193,7 @@ class RepairMesh {
   }
 
   // 4-4: the four elements around an interior edge (a, b) become four around a diagonal of their
-  // ring, whichever of the two improves the worst angle more.
+  // ring: the first of the two diagonals whose elements raise the worst angle.
   bool flip44(int t, int* flips) {
     const Tet e = tets_[t];
     for (int i = 0; i < 4; ++i)
@@ -303,8 +303,8 @@ class RepairMesh {
 
   // A flat element whose two faces lie on one interface (a cap on it): it changes sides, so the
   // interface takes its two other faces instead (an edge flip of the interface, which the element's
-  // flatness keeps within its fold), and the flips within its new region can then remove it.
-  // Undone if none can.
+  // flatness keeps within its fold), and a flip within its new region then removes it or a node
+  // move improves it. Undone if neither does.
   bool move_cap(int t, SliverRepair* report) {
     if (!region_) return false;
     const Tet e = tets_[t];

@@ -212,6 +212,7 @@ void TrainerWindow::start_take(const std::optional<std::filesystem::path>& recor
   view_->update_tissue(shown_, field_);
   view_->show_cursor(session_->cursor() != nullptr, cursor_);
   regions_bar_->clear();
+  regions_bar_->setVisible(view_->regions() > 0);  // a scene of one region has nothing to toggle
   for (std::size_t i = 0; i < view_->regions(); ++i) {
     const std::string name = view_->region_name(i);
     QAction* a = regions_bar_->addAction(QString::fromStdString(name));
