@@ -4,30 +4,12 @@
 #include <cmath>
 #include <map>
 
-
 namespace fetouch::meshes {
 
 namespace {
 
-Point3 sub(const Point3& a, const Point3& b) { return {a[0] - b[0], a[1] - b[1], a[2] - b[2]}; }
-Point3 cross(const Point3& a, const Point3& b) {
-  return {a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]};
-}
-double dot(const Point3& a, const Point3& b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
-double norm(const Point3& a) { return std::sqrt(dot(a, a)); }
-
+using namespace tet_math;
 constexpr auto& kFace = kTetFace;
-
-// The unit outward normal of each face (kFace's order) of a positively oriented element.
-std::array<Point3, 4> unit_outward_normals(const std::array<Point3, 4>& p) {
-  std::array<Point3, 4> n{};
-  for (int f = 0; f < 4; ++f) {
-    n[f] = cross(sub(p[kFace[f][1]], p[kFace[f][0]]), sub(p[kFace[f][2]], p[kFace[f][0]]));
-    const double length = norm(n[f]);
-    for (double& x : n[f]) x /= length;
-  }
-  return n;
-}
 
 // A mesh being repaired: the elements (dead ones marked), and for each node the live elements
 // that use it. Every adjacency question (is this face, edge or node on the boundary; which
@@ -433,120 +415,6 @@ class RepairMesh {
 };
 
 }  // namespace
-
-double tet_signed_volume(const Point3& a, const Point3& b, const Point3& c, const Point3& d) {
-  return dot(sub(b, a), cross(sub(c, a), sub(d, a))) / 6;
-}
-
-std::array<double, 6> dihedral_angles_deg(const Point3& a, const Point3& b, const Point3& c, const Point3& d) {
-  // The dihedral angle at the edge shared by faces f and g is pi minus the angle between their
-  // outward normals.
-  const auto n = unit_outward_normals({a, b, c, d});
-  std::array<double, 6> angles{};
-  int k = 0;
-  for (int f = 0; f < 4; ++f)
-    for (int g = f + 1; g < 4; ++g) angles[k++] = 180 - std::acos(std::clamp(dot(n[f], n[g]), -1.0, 1.0)) * 180 / M_PI;
-  return angles;
-}
-
-double min_dihedral_deg(const std::vector<Point3>& nodes, const Tet& t) {
-  const Point3 &a = nodes[t[0]], &b = nodes[t[1]], &c = nodes[t[2]], &d = nodes[t[3]];
-  if (!(tet_signed_volume(a, b, c, d) > 0)) return 0;
-  // The smallest angle is at the pair of faces whose outward normals are least opposed: one arc
-  // cosine for the element.
-  const auto n = unit_outward_normals({a, b, c, d});
-  double least = 1;
-  for (int f = 0; f < 4; ++f)
-    for (int g = f + 1; g < 4; ++g) least = std::min(least, dot(n[f], n[g]));
-  return 180 - std::acos(std::clamp(least, -1.0, 1.0)) * 180 / M_PI;
-}
-
-double restore_volume(std::vector<Point3>& nodes, const std::vector<Tet>& tets, double target_volume, double max_offset,
-                      double floor_deg) {
-  const auto volume_of = [&](const std::vector<Point3>& at) {
-    double v = 0;
-    for (const Tet& t : tets) v += tet_signed_volume(at[t[0]], at[t[1]], at[t[2]], at[t[3]]);
-    return v;
-  };
-  // Each boundary node's normal: the sum of its outward faces' area vectors, made unit. Moving
-  // every boundary node by d along it changes the volume by about d times the boundary's area.
-  std::vector<Point3> normal(nodes.size(), Point3{0, 0, 0});
-  std::vector<char> moving(nodes.size(), 0);
-  double area = 0;
-  for (const Triangle& f : boundary_faces(tets)) {
-    const Point3 &a = nodes[f[0]], &b = nodes[f[1]], &c = nodes[f[2]];
-    const Point3 n = cross(sub(b, a), sub(c, a));  // twice the area vector
-    area += 0.5 * norm(n);
-    for (const int v : f) {
-      moving[v] = 1;
-      for (int k = 0; k < 3; ++k) normal[v][k] += n[k];
-    }
-  }
-  if (area <= 0 || !(target_volume > 0)) return 0;
-  for (std::size_t v = 0; v < nodes.size(); ++v) {
-    const double length = norm(normal[v]);
-    for (int k = 0; k < 3; ++k) normal[v][k] = length > 0 ? normal[v][k] / length : 0;
-  }
-  std::vector<Point3> moved = nodes;
-  const auto move_by = [&](double d) {
-    for (std::size_t v = 0; v < nodes.size(); ++v)
-      if (moving[v])
-        for (int k = 0; k < 3; ++k) moved[v][k] = nodes[v][k] + d * normal[v][k];
-    return volume_of(moved);
-  };
-  // Secant steps on the offset, the first with the boundary's area as the slope.
-  double offset = 0, volume = volume_of(nodes), slope = area;
-  for (int step = 0; step < 20 && std::abs(volume - target_volume) > 1e-12 * target_volume; ++step) {
-    const double next = std::clamp(offset + (target_volume - volume) / slope, -max_offset, max_offset);
-    if (next == offset) break;  // held at the bound
-    const double next_volume = move_by(next);
-    if (next_volume != volume) slope = (next_volume - volume) / (next - offset);
-    offset = next, volume = next_volume;
-    if (!(slope > 0)) return 0;
-  }
-  move_by(offset);
-  for (const Tet& t : tets) {
-    if (!moving[t[0]] && !moving[t[1]] && !moving[t[2]] && !moving[t[3]]) continue;  // unchanged
-    const double before = min_dihedral_deg(nodes, t), after = min_dihedral_deg(moved, t);
-    if (after <= 0 || (after < floor_deg && after < before)) return 0;
-  }
-  nodes = std::move(moved);
-  return offset;
-}
-
-QualityReport mesh_quality(const std::vector<Point3>& nodes, const std::vector<Tet>& tets) {
-  QualityReport q;
-  q.min_dihedral_deg = 180, q.max_dihedral_deg = 0, q.min_radius_ratio = 1;
-  for (const auto& t : tets) {
-    const Point3 p[4] = {nodes[t[0]], nodes[t[1]], nodes[t[2]], nodes[t[3]]};
-    const double volume = tet_signed_volume(p[0], p[1], p[2], p[3]);
-    q.volume_m3 += volume;
-    double scale = 0;
-    for (int a = 0; a < 4; ++a)
-      for (int b = a + 1; b < 4; ++b) scale = std::max(scale, norm(sub(p[a], p[b])));
-    if (volume <= 0) {
-      ++(std::abs(volume) <= 1e-12 * scale * scale * scale ? q.degenerate : q.inverted);
-      q.min_dihedral_deg = 0, q.min_radius_ratio = 0;
-      continue;
-    }
-    double area = 0;
-    for (const auto& f : kFace) area += norm(cross(sub(p[f[1]], p[f[0]]), sub(p[f[2]], p[f[0]]))) / 2;
-    for (double angle : dihedral_angles_deg(p[0], p[1], p[2], p[3])) {
-      q.min_dihedral_deg = std::min(q.min_dihedral_deg, angle);
-      q.max_dihedral_deg = std::max(q.max_dihedral_deg, angle);
-      ++q.dihedral_histogram[std::min(17, static_cast<int>(angle / 10))];
-    }
-    // Radius ratio 3 r / R: r = 3V / area; R from the products of opposite edges' lengths.
-    const double a = norm(sub(p[0], p[1])) * norm(sub(p[2], p[3])), b = norm(sub(p[0], p[2])) * norm(sub(p[1], p[3])),
-                 c = norm(sub(p[0], p[3])) * norm(sub(p[1], p[2]));
-    const double circumradius = std::sqrt(std::max(0.0, (a + b + c) * (a + b - c) * (a - b + c) * (-a + b + c))) / (24 * volume);
-    const double ratio = 3 * (3 * volume / area) / circumradius;
-    q.min_radius_ratio = std::min(q.min_radius_ratio, ratio);
-    ++q.radius_ratio_histogram[std::clamp(static_cast<int>(ratio * 10), 0, 9)];
-  }
-  if (tets.empty()) q.min_dihedral_deg = 0, q.min_radius_ratio = 0;
-  return q;
-}
 
 SliverRepair repair_slivers(std::vector<Point3>& nodes, std::vector<Tet>& tets, double target_deg, std::vector<int>* region) {
   SliverRepair report;

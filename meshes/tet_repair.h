@@ -1,4 +1,5 @@
-// Tetrahedral mesh geometry, quality and sliver repair, independent of any mesher.
+// Tetrahedral mesh boundaries and sliver repair, independent of any mesher (the geometry and the
+// quality report: meshes/tet_geometry.h).
 //
 // A mesher that must keep a given surface (Gmsh inside a segmented surface) leaves slivers where
 // it may not move the surface's nodes: flat tetrahedra whose four nodes lie nearly in a plane.
@@ -22,23 +23,9 @@
 #include <array>
 #include <vector>
 
+#include "meshes/tet_geometry.h"
+
 namespace fetouch::meshes {
-
-using Point3 = std::array<double, 3>;
-using Tet = std::array<int, 4>;
-using Triangle = std::array<int, 3>;
-
-// The face opposite vertex f, ordered so that its normal (1 - 0) x (2 - 0) points out of a
-// positively oriented element.
-inline constexpr int kTetFace[4][3] = {{1, 2, 3}, {0, 3, 2}, {0, 1, 3}, {0, 2, 1}};
-
-double tet_signed_volume(const Point3& a, const Point3& b, const Point3& c, const Point3& d);
-
-// The six dihedral angles (degrees) of a positively oriented tetrahedron.
-std::array<double, 6> dihedral_angles_deg(const Point3& a, const Point3& b, const Point3& c, const Point3& d);
-
-// The smallest dihedral angle, or 0 for an element that is not positively oriented.
-double min_dihedral_deg(const std::vector<Point3>& nodes, const Tet& t);
 
 // The faces that belong to exactly one element, oriented outwards.
 std::vector<Triangle> boundary_faces(const std::vector<Tet>& tets);
@@ -49,18 +36,6 @@ bool boundary_is_closed_manifold(const std::vector<Tet>& tets);
 
 // Both at once (one pass over the faces).
 std::vector<Triangle> boundary_faces(const std::vector<Tet>& tets, bool* closed_manifold);
-
-struct QualityReport {
-  double min_dihedral_deg = 0, max_dihedral_deg = 0;
-  std::array<long, 18> dihedral_histogram{};      // 10-degree bins, 0..180
-  double min_radius_ratio = 0;                // 3 r_inscribed / R_circumscribed: 1 regular, 0 flat
-  std::array<long, 10> radius_ratio_histogram{};  // 0.1 bins
-  long inverted = 0, degenerate = 0;
-  double volume_m3 = 0;  // the sum of the signed volumes
-};
-
-// Dihedral angles and radius ratios of every element, inverted and degenerate ones counted.
-QualityReport mesh_quality(const std::vector<Point3>& nodes, const std::vector<Tet>& tets);
 
 // Moves the boundary nodes along their (area-weighted) normals by one offset so that the mesh
 // encloses `target_volume` (a surface remeshed by chords, or contoured from a blurred mask, lies a

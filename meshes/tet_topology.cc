@@ -1,8 +1,9 @@
-// Which faces of a tetrahedral mesh are its boundary, and whether that boundary is a closed
-// 2-manifold (meshes/tet_repair.h declares them).
+// Which faces of a tetrahedral mesh are its boundary, whether that boundary is a closed
+// 2-manifold, and moving it out to a volume (meshes/tet_repair.h declares them).
 #include "meshes/tet_repair.h"
 
 #include <algorithm>
+#include <cmath>
 #include <map>
 #include <utility>
 #include <vector>
@@ -106,6 +107,61 @@ std::vector<Triangle> boundary_faces(const std::vector<Tet>& tets, bool* closed_
   *closed_manifold = std::none_of(count.begin(), count.end(), [](int n) { return n > 2; }) &&
                      closed_manifold_surface(boundary);
   return boundary;
+}
+
+using namespace tet_math;
+
+double restore_volume(std::vector<Point3>& nodes, const std::vector<Tet>& tets, double target_volume, double max_offset,
+                      double floor_deg) {
+  const auto volume_of = [&](const std::vector<Point3>& at) {
+    double v = 0;
+    for (const Tet& t : tets) v += tet_signed_volume(at[t[0]], at[t[1]], at[t[2]], at[t[3]]);
+    return v;
+  };
+  // Each boundary node's normal: the sum of its outward faces' area vectors, made unit. Moving
+  // every boundary node by d along it changes the volume by about d times the boundary's area.
+  std::vector<Point3> normal(nodes.size(), Point3{0, 0, 0});
+  std::vector<char> moving(nodes.size(), 0);
+  double area = 0;
+  for (const Triangle& f : boundary_faces(tets)) {
+    const Point3 &a = nodes[f[0]], &b = nodes[f[1]], &c = nodes[f[2]];
+    const Point3 n = cross(sub(b, a), sub(c, a));  // twice the area vector
+    area += 0.5 * norm(n);
+    for (const int v : f) {
+      moving[v] = 1;
+      for (int k = 0; k < 3; ++k) normal[v][k] += n[k];
+    }
+  }
+  if (area <= 0 || !(target_volume > 0)) return 0;
+  for (std::size_t v = 0; v < nodes.size(); ++v) {
+    const double length = norm(normal[v]);
+    for (int k = 0; k < 3; ++k) normal[v][k] = length > 0 ? normal[v][k] / length : 0;
+  }
+  std::vector<Point3> moved = nodes;
+  const auto move_by = [&](double d) {
+    for (std::size_t v = 0; v < nodes.size(); ++v)
+      if (moving[v])
+        for (int k = 0; k < 3; ++k) moved[v][k] = nodes[v][k] + d * normal[v][k];
+    return volume_of(moved);
+  };
+  // Secant steps on the offset, the first with the boundary's area as the slope.
+  double offset = 0, volume = volume_of(nodes), slope = area;
+  for (int step = 0; step < 20 && std::abs(volume - target_volume) > 1e-12 * target_volume; ++step) {
+    const double next = std::clamp(offset + (target_volume - volume) / slope, -max_offset, max_offset);
+    if (next == offset) break;  // held at the bound
+    const double next_volume = move_by(next);
+    if (next_volume != volume) slope = (next_volume - volume) / (next - offset);
+    offset = next, volume = next_volume;
+    if (!(slope > 0)) return 0;
+  }
+  move_by(offset);
+  for (const Tet& t : tets) {
+    if (!moving[t[0]] && !moving[t[1]] && !moving[t[2]] && !moving[t[3]]) continue;  // unchanged
+    const double before = min_dihedral_deg(nodes, t), after = min_dihedral_deg(moved, t);
+    if (after <= 0 || (after < floor_deg && after < before)) return 0;
+  }
+  nodes = std::move(moved);
+  return offset;
 }
 
 }  // namespace fetouch::meshes

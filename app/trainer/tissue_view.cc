@@ -25,6 +25,8 @@
 #include <set>
 #include <string>
 
+#include "meshes/tet_geometry.h"
+
 namespace fetouch::app::trainer {
 
 namespace {
@@ -68,12 +70,7 @@ vtkSmartPointer<vtkPolyDataNormals> smooth_normals(vtkPolyData* data) {
 }
 
 double tet_volume(const MeshView& mesh, const std::array<unsigned int, 4>& t) {
-  const auto& a = mesh.points[t[0]];
-  double e[3][3];
-  for (int k = 0; k < 3; ++k)
-    for (int c = 0; c < 3; ++c) e[k][c] = mesh.points[t[std::size_t(k + 1)]][std::size_t(c)] - a[std::size_t(c)];
-  return (e[0][0] * (e[1][1] * e[2][2] - e[1][2] * e[2][1]) - e[0][1] * (e[1][0] * e[2][2] - e[1][2] * e[2][0]) +
-          e[0][2] * (e[1][0] * e[2][1] - e[1][1] * e[2][0])) / 6;
+  return meshes::tet_signed_volume(mesh.points[t[0]], mesh.points[t[1]], mesh.points[t[2]], mesh.points[t[3]]);
 }
 
 // The face (sorted or not) ordered so that its normal (b - a) x (c - a) points away from `apex`.
