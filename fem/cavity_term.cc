@@ -13,8 +13,8 @@ using namespace dealii;
 namespace {
 
 void check_supported(const Discretisation& d, const CavityLaw& law) {
-  if (d.fe->degree != 1)
-    throw std::invalid_argument("cavity: the wall is taken as flat faces between vertices; use P1 or Q1 elements");
+  if (d.fe->degree != 1 && d.fe->degree != 2)
+    throw std::invalid_argument("cavity: the wall's faces are taken as linear or quadratic; use elements of degree 1 or 2");
   if (law.gas ? !(law.initial_pressure_pa > 0) : !(law.bulk_modulus_pa > 0))
     throw std::invalid_argument("cavity: a gas needs a positive initial pressure, a liquid a positive bulk modulus");
 }
@@ -52,14 +52,56 @@ void add_face(const Discretisation& d, const Cell& cell, unsigned int f, bool in
   }
 }
 
+// A quadratic element's face f of `cell` as a curved face of the wall through its nodes: the cell's
+// dofs whose support points are the face's corners, edge midpoints (and a quadrilateral's centre).
+// The mapping is linear, so the nodes sit exactly there; they are found by position.
+template <class Cell>
+void add_quadratic_face(const Discretisation& d, const Cell& cell, unsigned int f, bool into_cell, CavityWall& wall) {
+  const auto face = cell->face(f);
+  std::vector<types::global_dof_index> indices(d.fe->n_dofs_per_cell());
+  cell->get_dof_indices(indices);
+  const std::vector<Point<3>>& unit = d.fe->get_unit_support_points();
+  std::vector<Point<3>> support(unit.size());
+  for (std::size_t i = 0; i < unit.size(); ++i) support[i] = d.mapping->transform_unit_to_real_cell(cell, unit[i]);
+  std::vector<Point<3>> nodes;
+  if (face->n_vertices() == 3) nodes = {face->vertex(0), face->vertex(1), face->vertex(2)};
+  else nodes = {face->vertex(0), face->vertex(1), face->vertex(3), face->vertex(2)};  // around the face
+  const std::size_t corners = nodes.size();
+  const Tensor<1, 3> normal = corners == 3 ? cross_product_3d(nodes[1] - nodes[0], nodes[2] - nodes[0])
+                                           : cross_product_3d(nodes[2] - nodes[0], nodes[3] - nodes[1]);
+  const bool points_in = normal * (cell->center() - face->center()) > 0;
+  if (points_in != into_cell) std::swap(nodes[1], nodes[corners - 1]);
+  for (std::size_t e = 0; e < corners; ++e) nodes.push_back((nodes[e] + nodes[(e + 1) % corners]) / 2);
+  if (corners == 4) nodes.push_back((nodes[0] + nodes[1] + nodes[2] + nodes[3]) / 4);
+  CavityWall::QuadraticFace q;
+  q.nodes = static_cast<unsigned int>(nodes.size());
+  const double tolerance = 1e-8 * cell->diameter();
+  for (unsigned int a = 0; a < q.nodes; ++a) {
+    for (unsigned int k = 0; k < 3; ++k) {
+      std::size_t i = 0;
+      while (i < support.size() && (d.fe->system_to_component_index(i).first != k || support[i].distance(nodes[a]) > tolerance)) ++i;
+      if (i == support.size()) throw std::logic_error("cavity: a quadratic face's node is not a dof of its cell");
+      q.dofs[a][k] = static_cast<unsigned int>(indices[i]);
+      q.position[a][k] = nodes[a][k];
+    }
+  }
+  wall.quadratic_faces.push_back(q);
+}
+
+template <class Cell>
+void add_wall_face(const Discretisation& d, const Cell& cell, unsigned int f, bool into_cell, CavityWall& wall) {
+  if (d.fe->degree == 1) add_face(d, cell, f, into_cell, wall);
+  else add_quadratic_face(d, cell, f, into_cell, wall);
+}
+
 }  // namespace
 
 CavityTerm::CavityTerm(const Discretisation& d, unsigned int boundary_id, const CavityLaw& law) : law_(law) {
   check_supported(d, law);
   for (const auto& cell : d.dof.active_cell_iterators())
     for (const unsigned int f : cell->face_indices())
-      if (cell->face(f)->at_boundary() && cell->face(f)->boundary_id() == boundary_id) add_face(d, cell, f, true, wall_);
-  if (wall_.triangles.empty())
+      if (cell->face(f)->at_boundary() && cell->face(f)->boundary_id() == boundary_id) add_wall_face(d, cell, f, true, wall_);
+  if (wall_.triangles.empty() && wall_.quadratic_faces.empty())
     throw std::invalid_argument("cavity: no boundary face has the cavity's boundary id " + std::to_string(boundary_id));
   finish_setup(d, "the surface with boundary id " + std::to_string(boundary_id));
 }
@@ -76,7 +118,7 @@ CavityTerm::CavityTerm(const Discretisation& d, const std::set<unsigned int>& co
     }
     any = true;
     for (const unsigned int f : cell->face_indices())
-      if (cell->face(f)->at_boundary() || !inside(cell->neighbor(f))) add_face(d, cell, f, false, wall_);
+      if (cell->face(f)->at_boundary() || !inside(cell->neighbor(f))) add_wall_face(d, cell, f, false, wall_);
   }
   if (!any) throw std::invalid_argument("cavity: no cell belongs to the cavity's regions");
   if (all) throw std::invalid_argument("cavity: the cavity's regions are the whole body: no wall holds them");

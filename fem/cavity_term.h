@@ -19,7 +19,8 @@ namespace fetouch::fem {
 
 class CavityTerm final : public Term {
  public:
-  // Throws std::invalid_argument for a surface that encloses no volume, or P2/Q2 elements.
+  // Throws std::invalid_argument for a surface that encloses no volume. Elements of degree 1 or 2
+  // (the wall's faces flat, or curved through their nodes: cavity.h).
   CavityTerm(const Discretisation& discretisation, unsigned int boundary_id, const CavityLaw& law);
   // The cavity as the cells of the material ids `contents` (a fluid region, and what floats in it):
   // its wall is their boundary against the other cells and the outside, so that the law holds for

@@ -89,9 +89,9 @@ class QuasiStaticSolver {
   void use_mean_dilatation(bool on);
 
   // A fluid-filled cavity bounded by the boundary faces of `boundary_id` (an inner surface, closed;
-  // P1 or Q1 elements), its pressure following its volume by `law` (fem/cavity.h). The pressure is
-  // part of the body's response: it is not scaled by load steps. Throws std::invalid_argument for
-  // a surface that encloses no volume, a second cavity, or P2/Q2 elements.
+  // quadratic elements' faces curved through their nodes), its pressure following its volume by
+  // `law` (fem/cavity.h). The pressure is part of the body's response: it is not scaled by load
+  // steps. Throws std::invalid_argument for a surface that encloses no volume or a second cavity.
   void add_cavity(unsigned int boundary_id, const CavityLaw& law);
   // A cavity that is the cells of the material ids `contents` (amniotic fluid and the fetus in it,
   // meshed as solids): the law holds for their total volume, and its pressure acts on the wall

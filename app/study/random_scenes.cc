@@ -107,8 +107,8 @@ RandomScene random_scene(unsigned int seed, int index) {
 
   // Effects: contact always (probes touch); the others drawn.
   const bool decoupled = model == "neo_hookean_incompressible" || model == "mooney_rivlin";
-  // A fluid in the shell (P1 or Q1 shells: every sixth scene), two times in three, its law in turn.
-  const bool cavity = shape == "shell" && linear && draw.turn<int>("cavity", {1, 1, 0}, 6) == 1;
+  // A fluid in the shell (every sixth scene), two times in three, its law in turn.
+  const bool cavity = shape == "shell" && draw.turn<int>("cavity", {1, 1, 0}, 6) == 1;
   const bool inertia = draw.chance(0.45);
   y << "effects:\n  - contact\n";
   if (draw.chance(0.4)) y << "  - gravity: {acceleration_m_per_s2: " << triple(0, 0, -9.81 * draw.uniform(0.5, 1)) << "}\n";

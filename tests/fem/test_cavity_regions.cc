@@ -39,12 +39,12 @@ bool in_hole(const Point<3>& p) {
   return true;
 }
 
-// The box [-2.5, 2.5]^3 cm of tetrahedra (each of 10^3 cubes split in 24 by deal.II); hollow:
+// The box [-2.5, 2.5]^3 cm of tetrahedra (each of 10^3 cubes, or 5^3, split in 24 by deal.II); hollow:
 // without the hole's cells; otherwise the hole's cells are fluid (and the middle cube's the
 // inclusion when asked). Tetrahedra: P1 faces are flat, so both cavities are the same triangles.
-void box(dealii::Triangulation<3>& tria, bool hollow, bool inclusion) {
+void box(dealii::Triangulation<3>& tria, bool hollow, bool inclusion, unsigned int divisions = 10) {
   dealii::Triangulation<3> cubes;
-  dealii::GridGenerator::subdivided_hyper_cube(cubes, 10, -2.5 * kCell, 2.5 * kCell);
+  dealii::GridGenerator::subdivided_hyper_cube(cubes, divisions, -2.5 * kCell, 2.5 * kCell);
   if (hollow) {  // removed before the split: deal.II 9.4 removes no tetrahedra
     std::set<dealii::Triangulation<3>::active_cell_iterator> hole;
     for (const auto& cell : cubes.active_cell_iterators())
@@ -71,14 +71,14 @@ struct Answer {
   double reference_volume, pressure, volume_change, top_uz, side_ux;
 };
 
-Answer press(bool hollow, bool inclusion = false) {
+Answer press(bool hollow, bool inclusion = false, int degree = 1) {
   dealii::Triangulation<3> tria;
-  box(tria, hollow, inclusion);
+  box(tria, hollow, inclusion, degree == 1 ? 10 : 5);  // P2 on cubes of 1 cm: fewer DOFs than P1's
   const double wall_e = 5000, nu = 0.4;
   const NeoHookean wall(lame_lambda(wall_e, nu), lame_mu(wall_e, nu));
   const NeoHookean fluid(lame_lambda(wall_e * 1e-5, 0.3), lame_mu(wall_e * 1e-5, 0.3));
   const NeoHookean stiff(lame_lambda(100 * wall_e, nu), lame_mu(100 * wall_e, nu));
-  QuasiStaticSolver solver(tria, wall, 1);
+  QuasiStaticSolver solver(tria, wall, degree);
   solver.prescribe_displacement(kBase, {true, true, true}, Tensor<1, 3>());
   CavityLaw water;
   water.bulk_modulus_pa = 2.2e9;
@@ -102,8 +102,8 @@ Answer press(bool hollow, bool inclusion = false) {
                  solver.cavity_volume() / solver.cavity_reference_volume() - 1,
                  solver.displacement_at(Point<3>(0, 0, 2.5 * kCell))[2],
                  solver.displacement_at(Point<3>(2.5 * kCell, 0, 0.5 * kCell))[0]};
-  std::printf("%s: V0 %.6e m^3, p %.4f Pa, dV/V0 %.3e, top u_z %.4e m, side u_x %.4e m\n",
-              hollow ? "hollow" : inclusion ? "filled, with an inclusion" : "filled", a.reference_volume, a.pressure,
+  std::printf("P%d, %s: V0 %.6e m^3, p %.4f Pa, dV/V0 %.3e, top u_z %.4e m, side u_x %.4e m\n",
+              degree, hollow ? "hollow" : inclusion ? "filled, with an inclusion" : "filled", a.reference_volume, a.pressure,
               a.volume_change, a.top_uz, a.side_ux);
   return a;
 }
@@ -121,6 +121,21 @@ TEST(CavityRegions, AFilledRegionBehavesAsTheHollowCavity) {
   EXPECT_NEAR(filled.side_ux, hollow.side_ux, 1e-4 * std::abs(hollow.side_ux));
   // The liquid's law: dV/V0 = -p/K, to the law's own convergence test (1e-10 V0) and Newton's.
   EXPECT_NEAR(filled.volume_change, -filled.pressure / 2.2e9, 1e-9);  // the law holds to 1e-10 V0
+}
+
+// P2 (the default scene's regions with quadratic tetrahedra, on cubes of 1 cm): the wall is the
+// interface's curved faces, and the same equivalence holds; the liquid's law holds for the curved
+// volume.
+TEST(CavityRegions, QuadraticElementsFilledBehaveAsHollowToo) {
+  const Answer hollow = press(true, false, 2), filled = press(false, false, 2);
+  const double hole = std::pow(3 * kCell, 3);
+  EXPECT_NEAR(filled.reference_volume, hole, 1e-12 * hole);
+  ASSERT_GT(hollow.pressure, 1.0);
+  EXPECT_GT(hollow.side_ux, 0);
+  EXPECT_NEAR(filled.pressure, hollow.pressure, 1e-4 * hollow.pressure);
+  EXPECT_NEAR(filled.top_uz, hollow.top_uz, 1e-4 * std::abs(hollow.top_uz));
+  EXPECT_NEAR(filled.side_ux, hollow.side_ux, 1e-4 * std::abs(hollow.side_ux));
+  EXPECT_NEAR(filled.volume_change, -filled.pressure / 2.2e9, 1e-9);
 }
 
 TEST(CavityRegions, AStiffInclusionInTheFluidKeepsTheTotalVolume) {
