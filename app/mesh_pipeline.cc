@@ -17,6 +17,11 @@ std::string meshing_sizes_text(const config::MeshingOptions& m) {
     return out.str();
   };
   std::string text = mm(m.target_size_m);
+  if (m.refine_center_m) {
+    const auto& c = *m.refine_center_m;
+    text += ", " + mm(m.refine_size_m) + " within " + mm(m.refine_radius_m) + " of (" + mm(c[0]) + ", " + mm(c[1]) +
+            ", " + mm(c[2]) + ")" + (m.refine_around_probes ? " around the probes' paths" : "");
+  }
   if (m.surface != config::MeshSurface::conforming) return text;
   text += ", conforming regions";
   if (m.sizes_m.empty()) return text;

@@ -9,10 +9,12 @@
 #include <cstdlib>
 #include <functional>
 #include <iostream>
+#include <limits>
 #include <sstream>
 #include <stdexcept>
 
 #include "app/log.h"
+#include "app/recording.h"
 #include "config/scene_loader.h"
 #include "imaging/phantom.h"
 #include "imaging/volume_io.h"
@@ -176,5 +178,36 @@ config::MeshSpec mesh_scene_volume(const config::MeshSpec& spec) {
   out.path = file;
   return out;
 }
+
+config::MeshSpec resolved_mesh_spec(const config::Scene& scene) {
+  config::MeshSpec spec = scene.mesh;
+  auto& m = spec.meshing;
+  if (!m.refine_around_probes) return spec;
+  const double inf = std::numeric_limits<double>::infinity();
+  Eigen::Vector3d low(inf, inf, inf), high = -low;
+  double radius = 0;
+  for (std::size_t i = 0; i < scene.probes.size(); ++i) {
+    const config::Probe& probe = scene.probes[i];
+    if (probe.device.trajectory.empty()) continue;  // a PHANTOM or the mouse: no path known beforehand
+    haptics::Trajectory path;
+    try {
+      path = read_probe_trajectory(probe.device.trajectory, probe.name, static_cast<int>(i));
+    } catch (const std::exception& e) {
+      throw std::runtime_error(scene.source.string() + ": meshing.refine.around_probes: " + e.what());
+    }
+    for (const Eigen::Vector3d& x : path.positions_m) low = low.cwiseMin(x), high = high.cwiseMax(x);
+    radius = std::max(radius, probe.radius_m);
+  }
+  if (!(radius > 0))
+    throw std::runtime_error(scene.source.string() +
+                             ": meshing.refine.around_probes: no probe has a trajectory (a replay or operator device) "
+                             "to refine around; give refine.center_m and radius_m instead");
+  const Eigen::Vector3d centre = (low + high) / 2;
+  m.refine_center_m = config::Vec3{centre[0], centre[1], centre[2]};
+  m.refine_radius_m = (high - low).norm() / 2 + radius;
+  return spec;
+}
+
+config::MeshSpec mesh_scene_volume(const config::Scene& scene) { return mesh_scene_volume(resolved_mesh_spec(scene)); }
 
 }  // namespace fetouch::app

@@ -24,6 +24,15 @@ std::optional<config::Scene> load_scene_or_report(const std::string& file);
 // The spec unchanged unless it is a volume or the phantom; then a `file` spec of the cached .vtu (meshed now if
 // not cached). Throws std::runtime_error naming the volume and what failed.
 config::MeshSpec mesh_scene_volume(const config::MeshSpec& spec);
+// The same for the scene's own mesh, its refinement ball resolved first (resolved_mesh_spec).
+config::MeshSpec mesh_scene_volume(const config::Scene& scene);
+
+// The scene's mesh spec with `meshing.refine: {around_probes: true}` made a ball: the smallest one
+// around the bounding box of every replayed or operated probe's trajectory, widened by the largest
+// such probe's radius (the elements under a probe are where its force is felt). Unchanged
+// otherwise. Throws std::runtime_error naming the scene and the trajectory that cannot be read, or
+// saying that no probe has a trajectory.
+config::MeshSpec resolved_mesh_spec(const config::Scene& scene);
 
 std::filesystem::path mesh_cache_dir();
 // Where the mesh of a volume or phantom spec is cached (whether it is there yet or not).

@@ -54,6 +54,9 @@ struct MeshingOptions {
   // Finer elements near a point (absent: none).
   std::optional<Vec3> refine_center_m;
   double refine_radius_m = 0, refine_size_m = 0;
+  // The ball around the probes' trajectories instead (refine_size_m inside): the app finds its
+  // centre and radius from the trajectory files (app/scene_mesh.h) before meshing.
+  bool refine_around_probes = false;
 };
 
 // A mesh generated from a primitive. Boundary faces of a box are named xmin, xmax, ymin, ymax, zmin,

@@ -197,12 +197,21 @@ void read_meshing(MapView& parent, MeshingOptions& out) {
   }
   if (map.has("refine")) {
     const Entry r = map.entry("refine");
-    MapView refine(map.reader(), r.value, r.path, r.key_mark, {"center_m", "radius_m", "size_m"});
+    MapView refine(map.reader(), r.value, r.path, r.key_mark, {"center_m", "radius_m", "size_m", "around_probes"});
+    if (refine.valid()) refine.boolean("around_probes", out.refine_around_probes);
     Vec3 center{};
-    if (refine.valid() && refine.vec3("center_m", center, Need::required) &&
-        refine.number("radius_m", out.refine_radius_m, plausible::tissue_length_m, Need::required) &&
-        refine.number("size_m", out.refine_size_m, plausible::element_size_m, Need::required))
+    if (out.refine_around_probes) {  // the ball is the probes' (app/scene_mesh.h)
+      for (const char* key : {"center_m", "radius_m"})
+        if (refine.has(key)) {
+          const Entry given = refine.entry(key);
+          map.reader().error(given.key_mark, given.path, "'" + std::string(key) + "' is not used with around_probes: true (the ball holds the probes' trajectories)");
+        }
+      refine.number("size_m", out.refine_size_m, plausible::element_size_m, Need::required);
+    } else if (refine.valid() && refine.vec3("center_m", center, Need::required) &&
+               refine.number("radius_m", out.refine_radius_m, plausible::tissue_length_m, Need::required) &&
+               refine.number("size_m", out.refine_size_m, plausible::element_size_m, Need::required)) {
       out.refine_center_m = center;
+    }
   }
 }
 

@@ -65,11 +65,7 @@ std::string vec(const config::Vec3& v) {
 config::Diagnostic diagnostic_at(const std::string& file, const config::SourceLocation& where,
                                  const std::string& key, const std::string& message) {
   config::Diagnostic d;
-  d.file = file;
-  d.line = where.line;
-  d.column = where.column;
-  d.key = key;
-  d.message = message;
+  d.file = file, d.line = where.line, d.column = where.column, d.key = key, d.message = message;
   return d;
 }
 
@@ -165,10 +161,13 @@ SceneReport check_one(const std::string& file, bool no_mesh) {
     config::LoadedScene loaded = config::load_scene(file);
     report.scene = std::make_unique<config::Scene>(std::move(loaded.scene));
     report.warnings = std::move(loaded.warnings);
+    report.scene->mesh = resolved_mesh_spec(*report.scene);  // the probes' refinement ball, as a session's
   } catch (const config::SceneError& error) {
     for (const auto& d : error.diagnostics())
-      (d.severity == config::Diagnostic::Severity::error ? report.errors : report.warnings)
-          .push_back(d);
+      (d.severity == config::Diagnostic::Severity::error ? report.errors : report.warnings).push_back(d);
+    return report;
+  } catch (const std::runtime_error& e) {
+    report.errors.push_back(diagnostic_at(file, report.scene->mesh.where, "mesh.meshing.refine", e.what()));
     return report;
   }
   if (!no_mesh) check_referenced_data(report);

@@ -358,7 +358,7 @@ int run_replay(const ReplayOptions& o) {
   std::optional<IdealComparison> comparison;
   double session_seconds = 0;  // the session itself (tissue built, replayed, written)
   try {
-    scene.mesh = mesh_scene_volume(scene.mesh);
+    scene.mesh = mesh_scene_volume(scene);
     const auto session_start = std::chrono::steady_clock::now();
     summary = run_session(scene, o, loop_settings(scene), &out, false, &patches);
     session_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - session_start).count();

@@ -105,7 +105,7 @@ int run_run(const RunOptions& o) {
   SessionSummary summary;
   double seconds = 0;
   try {
-    scene.mesh = mesh_scene_volume(scene.mesh);
+    scene.mesh = mesh_scene_volume(scene);
     const haptics::HapticLoopSettings settings = loop_settings(scene);
     // The devices first: a PHANTOM that cannot be had is said before the tissue is built.
     std::vector<std::unique_ptr<haptics::Device>> devices;

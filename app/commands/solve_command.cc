@@ -182,7 +182,7 @@ int run_solve(const SolveOptions& o) {
   std::unique_ptr<fem::TissueModel> model;
   std::vector<int> patches;
   try {
-    scene.mesh = mesh_scene_volume(scene.mesh);  // a volume is meshed (once, cached) first
+    scene.mesh = mesh_scene_volume(scene);  // a volume is meshed (once, cached) first
     log::info() << "building the tissue model of " << scene.name;
     model = fem::build_tissue_model(scene);
     const double radius = o.radius_m > 0 ? o.radius_m : scene.probes.empty() ? 5e-3 : scene.probes.front().radius_m;

@@ -70,7 +70,7 @@ config::Scene configured(const config::Scene& base, const Configuration& c) {
     if (c.reference) scene.solver.accuracy_compliance = 1e-12;
   }
   scene.solver.rate_hz = scene.haptics.rate_hz / c.ratio;
-  scene.mesh = mesh_scene_volume(scene.mesh);
+  scene.mesh = mesh_scene_volume(scene);
   return scene;
 }
 

@@ -196,7 +196,7 @@ int run_study_effects(const EffectsOptions& o) {
   }
   const fs::path out(o.out);
   prepare_study_folder(out, o.scene, base);
-  base.mesh = mesh_scene_volume(base.mesh);
+  base.mesh = mesh_scene_volume(base);
   const double duration = o.quick && o.duration_s <= 0 ? 1.0 : o.duration_s;
   StudyRunSettings settings;
   settings.max_ticks = duration > 0 ? std::lround(duration * base.haptics.rate_hz) + 1 : -1;

@@ -393,7 +393,7 @@ int run_study_hard_cases(const HardCasesOptions& o) {
   const fs::path out(o.out);
   if (!builtin) prepare_study_folder(out, o.scene, scene);
   fs::create_directories(out);
-  scene.mesh = mesh_scene_volume(scene.mesh);
+  scene.mesh = mesh_scene_volume(scene);
   Battery battery(scene, builtin, o);
   const auto cases = battery.cases();
   Progress progress("study hard-cases", static_cast<long>(cases.size()), std::cerr, Progress::stderr_is_terminal());

@@ -47,7 +47,7 @@ void patches(const fem::QuasiStaticSolver& solver, int probes, TissueSnapshot& s
 
 TrainerSession::TrainerSession(const config::Scene& scene, const TrainerOptions& options, std::vector<std::string>& messages)
     : scene_(scene) {
-  scene_.mesh = mesh_scene_volume(scene_.mesh);
+  scene_.mesh = mesh_scene_volume(scene_);
   settings_.loop = loop_settings(scene_);
   settings_.loop.modes = &modes_;
   model_ = build_session_tissue(scene_);

@@ -3,6 +3,11 @@
 #include <yaml-cpp/yaml.h>
 
 #include <filesystem>
+#include <fstream>
+#include <iterator>
+#include <string>
+
+#include <unistd.h>
 
 #include "tests/support/broken_scene.h"
 #include "tests/support/run_command.h"
@@ -34,6 +39,24 @@ TEST(CheckCommand, JsonReportDescribesTheScene) {
   // The block is 0.10 x 0.08 x 0.05 m and its tetrahedra tile it exactly.
   EXPECT_NEAR(scene["mesh"]["volume_m3"].as<double>(), 0.10 * 0.08 * 0.05, 1e-15);
   EXPECT_TRUE(scene["mesh"]["simplex"].as<bool>());
+}
+
+// The default scene with its refinement ball around the probe's path: check prints the ball (its
+// value is checked against the closed form in tests/app/test_probe_refinement.cc).
+TEST(CheckCommand, ReportsTheRefinementBallAroundTheProbes) {
+  std::ifstream in(kScenes + "/fetus_phantom.yaml");
+  std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const std::string surface = "    surface: contoured\n";
+  ASSERT_NE(text.find(surface), std::string::npos);
+  text.replace(text.find(surface), surface.size(), surface + "    refine: {around_probes: true, size_m: 0.004}\n");
+  text.replace(text.find("trajectories/"), 13, kScenes + "/trajectories/");
+  const auto file = std::filesystem::temp_directory_path() / ("fetouch_check_refine_" + std::to_string(::getpid()) + ".yaml");
+  std::ofstream(file) << text;
+  const auto r = run_command(fetouch("check --no-mesh " + file.string()));
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.out.find("4 mm within"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("around the probes' paths"), std::string::npos) << r.out;
+  std::filesystem::remove(file);
 }
 
 class BrokenSceneCli : public ::testing::TestWithParam<std::filesystem::path> {};

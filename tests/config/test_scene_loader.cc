@@ -203,6 +203,28 @@ TEST(SceneLoader, ConformingRegionsTakeSizes) {
   EXPECT_THROW(scene("{regions: {wall: [1]}, surface: conforming, sizes: {wall: -1}}"), SceneError);
 }
 
+// meshing.refine: a ball given, or the ball around the probes' paths (the app finds it from the
+// trajectories: tests/app/test_probe_refinement.cc).
+TEST(SceneLoader, RefinementBallGivenOrAroundTheProbes) {
+  const auto scene = [&](const std::string& meshing) {
+    return parse_scene("mesh:\n  phantom: {seed: 1}\n  meshing: " + meshing +
+                           "\nmaterial: {model: neo_hookean, youngs_modulus_pa: 5000, poisson_ratio: 0.45}\n",
+                       "inline", kData)
+        .scene;
+  };
+  const Scene given = scene("{refine: {center_m: [0, 0, 0.05], radius_m: 0.02, size_m: 0.003}}");
+  ASSERT_TRUE(given.mesh.meshing.refine_center_m.has_value());
+  EXPECT_DOUBLE_EQ(given.mesh.meshing.refine_radius_m, 0.02);
+  EXPECT_FALSE(given.mesh.meshing.refine_around_probes);
+  const Scene around = scene("{refine: {around_probes: true, size_m: 0.003}}");
+  EXPECT_TRUE(around.mesh.meshing.refine_around_probes);
+  EXPECT_DOUBLE_EQ(around.mesh.meshing.refine_size_m, 0.003);
+  EXPECT_FALSE(around.mesh.meshing.refine_center_m.has_value());
+  EXPECT_THROW(scene("{refine: {around_probes: true, size_m: 0.003, center_m: [0, 0, 0]}}"), SceneError);
+  EXPECT_THROW(scene("{refine: {around_probes: true}}"), SceneError);  // no size
+  EXPECT_THROW(scene("{refine: {around_probes: false, size_m: 0.003}}"), SceneError);  // then a centre and radius
+}
+
 TEST(SceneLoader, EmptyAndMissingFilesAreErrors) {
   EXPECT_THROW(parse_scene("", "empty.yaml", kData), SceneError);
   EXPECT_THROW(parse_scene("# only a comment\n", "empty.yaml", kData), SceneError);
