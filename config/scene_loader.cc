@@ -204,7 +204,8 @@ void read_meshing(MapView& parent, MeshingOptions& out) {
       for (const char* key : {"center_m", "radius_m"})
         if (refine.has(key)) {
           const Entry given = refine.entry(key);
-          map.reader().error(given.key_mark, given.path, "'" + std::string(key) + "' is not used with around_probes: true (the ball holds the probes' trajectories)");
+          map.reader().error(given.key_mark, given.path,
+                             "'" + std::string(key) + "' is not used with around_probes: true (the ball holds the probes' trajectories)");
         }
       refine.number("size_m", out.refine_size_m, plausible::element_size_m, Need::required);
     } else if (refine.valid() && refine.vec3("center_m", center, Need::required) &&

@@ -79,7 +79,10 @@ void add_quadratic_face(const Discretisation& d, const Cell& cell, unsigned int 
   for (unsigned int a = 0; a < q.nodes; ++a) {
     for (unsigned int k = 0; k < 3; ++k) {
       std::size_t i = 0;
-      while (i < support.size() && (d.fe->system_to_component_index(i).first != k || support[i].distance(nodes[a]) > tolerance)) ++i;
+      const auto elsewhere = [&](std::size_t j) {
+        return d.fe->system_to_component_index(j).first != k || support[j].distance(nodes[a]) > tolerance;
+      };
+      while (i < support.size() && elsewhere(i)) ++i;
       if (i == support.size()) throw std::logic_error("cavity: a quadratic face's node is not a dof of its cell");
       q.dofs[a][k] = static_cast<unsigned int>(indices[i]);
       q.position[a][k] = nodes[a][k];
