@@ -41,6 +41,7 @@ MeshRequest mesh_request(const config::MeshingOptions& m) {
                   : m.smoothing == config::SmoothingFilter::median ? imaging::TissueSegmentation::Smoothing::median
                                                                    : imaging::TissueSegmentation::Smoothing::gaussian;
   for (const auto& [name, labels] : m.regions) r.regions.push_back({name, labels});
+  r.regions_from_image = m.regions_from_image;
   r.surface = m.surface;
   auto& s = r.settings;
   s.element_size_mm = m.target_size_m * 1e3;
@@ -57,11 +58,37 @@ MeshRequest mesh_request(const config::MeshingOptions& m) {
   return r;
 }
 
+imaging::Volume<float> image_label_map(const imaging::Volume<float>& image, const imaging::TissueSegmentation& segmentation,
+                                       float* threshold_used) {
+  const imaging::Mask inside = imaging::segment_tissue(image, segmentation, threshold_used);
+  imaging::TissueSegmentation cover;
+  cover.threshold = 0.5f;  // any echo; the reconstruction leaves 0 where no frame passed
+  cover.smoothing = imaging::TissueSegmentation::Smoothing::none;
+  cover.closing = segmentation.closing;
+  const imaging::Mask imaged = imaging::segment_tissue(image, cover);
+  imaging::Volume<float> labels;
+  labels.dimensions = image.dimensions, labels.spacing_mm = image.spacing_mm, labels.origin_mm = image.origin_mm;
+  labels.direction = image.direction;
+  labels.data.resize(image.data.size());
+  for (std::size_t i = 0; i < labels.data.size(); ++i) labels.data[i] = inside.data[i] ? 2.0f : imaged.data[i] ? 1.0f : 0.0f;
+  return labels;
+}
+
 MeshOutcome mesh_volume(const imaging::Volume<float>& volume, MeshRequest request) {
   const auto started = std::chrono::steady_clock::now();
   const auto since = [](std::chrono::steady_clock::time_point t) {
     return std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
   };
+  if (request.regions_from_image) {
+    float threshold = 0;
+    const imaging::Volume<float> labels = image_label_map(volume, request.segmentation, &threshold);
+    request.regions_from_image = false;
+    request.segmentation = imaging::TissueSegmentation();
+    MeshOutcome out = mesh_volume(labels, std::move(request));
+    out.phases.insert(out.phases.begin(), {"image regions", since(started)});
+    out.thresholded = true, out.threshold_used = threshold;
+    return out;
+  }
   MeshOutcome out;
   const bool in_regions = !request.regions.empty();
   if (in_regions && (request.segmentation.fetus || !request.segmentation.labels.empty()))

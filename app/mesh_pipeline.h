@@ -23,6 +23,8 @@ namespace fetouch::app {
 struct MeshRequest {
   imaging::TissueSegmentation segmentation;  // unless the regions are meshed as labels
   std::vector<meshes::MeshRegion> regions;   // a label map in regions (empty: one tissue)
+  // The regions {imaged: [1], segmented: [2]} made from an intensity image first (image_label_map).
+  bool regions_from_image = false;
   config::MeshSurface surface = config::MeshSurface::restricted;
   meshes::MeshingSettings settings;          // settings.restricted_surface follows `surface`
 };
@@ -40,6 +42,14 @@ std::string meshing_sizes_text(const config::MeshingOptions& options);
 
 // A scene's meshing options as a request (sizes in mm, the regions' sizes by region).
 MeshRequest mesh_request(const config::MeshingOptions& options);
+
+// An intensity image as a label map: 1 where the image shows something (every voxel not 0: the
+// reconstruction's cover, its largest piece, closed by the segmentation's `closing` and filled), 2
+// where `segmentation` finds the tissue (the bone of a spine, say), 0 elsewhere. So the medium a
+// probe presses through is meshed around what the image segments. `threshold_used` as in
+// imaging::segment_tissue.
+imaging::Volume<float> image_label_map(const imaging::Volume<float>& image, const imaging::TissueSegmentation& segmentation,
+                                       float* threshold_used = nullptr);
 
 // Throws std::invalid_argument for contradictory requests (regions with labels or the fetal
 // pipeline), std::runtime_error (meshes/ and imaging/'s reasons) when the volume cannot be meshed.

@@ -59,6 +59,7 @@ std::string cache_key(const config::MeshSpec& spec) {
   // The conforming mesher's own revision (2: Lloyd smoothing and the interface-aware repair), kept
   // apart so that the other paths' cached meshes stay valid.
   if (m.surface == config::MeshSurface::conforming) key << "conforming 2|";
+  if (m.regions_from_image) key << "image regions|";
   for (const auto& [name, size] : m.sizes_m) key << name << ':' << size << ',';
   for (int l : m.labels) key << l << ',';
   for (const auto& [name, labels] : m.regions) {

@@ -43,6 +43,10 @@ struct MeshingOptions {
   std::vector<int> labels;          // a label map: these labels are the tissue
   // A label map in regions (`fetouch mesh --regions`): name and labels; their union is `labels`.
   std::vector<std::pair<std::string, std::vector<int>>> regions;
+  // `image_regions`: an intensity image made a label map before meshing: label 1 every voxel the
+  // image covers (not 0), label 2 the segmentation (threshold etc. below); `regions` then names them
+  // {imaged: [1], segmented: [2]} and `labels` stays empty.
+  bool regions_from_image = false;
   bool fetus = false;               // the fetal segmentation pipeline
   std::optional<double> threshold;  // intensity; absent: halfway between the 5th and 95th percentiles
   SmoothingFilter smoothing = SmoothingFilter::gaussian;

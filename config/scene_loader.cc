@@ -108,7 +108,7 @@ void read_meshing(MapView& parent, MeshingOptions& out) {
   const Entry e = parent.entry("meshing");
   MapView map(parent.reader(), e.value, e.path, e.key_mark,
               {"target_size_m", "labels", "regions", "fetus", "threshold", "smoothing", "smoothing_sigma_m",
-               "closing_voxels", "refine", "surface", "sizes"});
+               "closing_voxels", "refine", "surface", "sizes", "image_regions"});
   if (!map.valid()) return;
   map.number("target_size_m", out.target_size_m, plausible::element_size_m);
   if (map.has("threshold")) {
@@ -158,6 +158,19 @@ void read_meshing(MapView& parent, MeshingOptions& out) {
         out.regions.emplace_back(name, labels);
         out.labels.insert(out.labels.end(), labels.begin(), labels.end());
       }
+    }
+  }
+  if (map.has("image_regions")) {  // {segmented: NAME, imaged: NAME}: the label map made from the image
+    const Entry e = map.entry("image_regions");
+    MapView names(map.reader(), e.value, e.path, e.key_mark, {"segmented", "imaged"});
+    std::string segmented, imaged;
+    if (names.valid() && names.text("segmented", segmented, Need::required) && names.text("imaged", imaged, Need::required)) {
+      if (!out.regions.empty() || !out.labels.empty())
+        map.reader().error(e.key_mark, e.path, "image_regions makes the regions from an intensity image: drop regions and labels");
+      else if (segmented == imaged)
+        map.reader().error(e.value_mark, e.path, "the segmented and the imaged regions need two names, not '" + imaged + "' twice");
+      else
+        out.regions = {{imaged, {1}}, {segmented, {2}}}, out.regions_from_image = true;
     }
   }
   map.boolean("fetus", out.fetus);

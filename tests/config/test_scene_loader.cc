@@ -225,6 +225,26 @@ TEST(SceneLoader, RefinementBallGivenOrAroundTheProbes) {
   EXPECT_THROW(scene("{refine: {around_probes: false, size_m: 0.003}}"), SceneError);  // then a centre and radius
 }
 
+// meshing.image_regions: an intensity image made the label map {imaged: [1], segmented: [2]}.
+TEST(SceneLoader, ImageRegionsNameTheImagedMediumAndTheSegmentation) {
+  const auto scene = [&](const std::string& meshing) {
+    return parse_scene("mesh:\n  phantom: {seed: 1}\n  meshing: " + meshing +
+                           "\nmaterial: {model: neo_hookean, youngs_modulus_pa: 5000, poisson_ratio: 0.45}\n",
+                       "inline", kData)
+        .scene;
+  };
+  const Scene s = scene("{image_regions: {segmented: bone, imaged: medium}, threshold: 120}");
+  EXPECT_TRUE(s.mesh.meshing.regions_from_image);
+  ASSERT_EQ(s.mesh.meshing.regions.size(), 2u);
+  EXPECT_EQ(s.mesh.meshing.regions[0], (std::pair<std::string, std::vector<int>>{"medium", {1}}));
+  EXPECT_EQ(s.mesh.meshing.regions[1], (std::pair<std::string, std::vector<int>>{"bone", {2}}));
+  EXPECT_TRUE(s.mesh.meshing.labels.empty());  // the image's intensities are segmented, not labels
+  EXPECT_THROW(scene("{image_regions: {segmented: bone}}"), SceneError);
+  EXPECT_THROW(scene("{image_regions: {segmented: bone, imaged: bone}}"), SceneError);
+  EXPECT_THROW(scene("{image_regions: {segmented: bone, imaged: medium}, regions: {wall: [1]}}"), SceneError);
+  EXPECT_THROW(scene("{image_regions: {segmented: bone, imaged: medium}, labels: [1]}"), SceneError);
+}
+
 TEST(SceneLoader, EmptyAndMissingFilesAreErrors) {
   EXPECT_THROW(parse_scene("", "empty.yaml", kData), SceneError);
   EXPECT_THROW(parse_scene("# only a comment\n", "empty.yaml", kData), SceneError);
