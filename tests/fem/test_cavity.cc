@@ -99,25 +99,21 @@ LameAnswer pressurised_octant(int degree, int refinements) {
   return r;
 }
 
-TEST(Cavity, PressurisedLiquidSettlesAtLamesThickSphereAnswer) {
-  const LameAnswer r = pressurised_octant(1, 2);
+// Pressure and volume within 1 %, the outer wall within 3 %, the inner wall within `inner`.
+void expect_lame(const LameAnswer& r, double inner) {
   EXPECT_NEAR(r.pressure, r.expected_pressure, 0.01 * r.expected_pressure);
   EXPECT_NEAR(r.volume_change, r.expected_volume_change, 0.01 * r.expected_volume_change);
   EXPECT_NEAR(r.u_outer, r.u_outer_lame, 0.03 * r.u_outer_lame);
-  // The inner wall's vertices converge at first order on this cube-sphere mesh (measured: 16 %, 10 %,
-  // 5.5 % above Lame at 1, 2, 3 refinements) while the volume and the pressure are already exact.
-  EXPECT_NEAR(r.u_inner, r.u_lame, 0.12 * r.u_lame);
+  EXPECT_NEAR(r.u_inner, r.u_lame, inner * r.u_lame);
 }
+
+// The inner wall's vertices converge at first order on this cube-sphere mesh (measured: 16 %, 10 %,
+// 5.5 % above Lame at 1, 2, 3 refinements) while the volume and the pressure are already exact.
+TEST(Cavity, PressurisedLiquidSettlesAtLamesThickSphereAnswer) { expect_lame(pressurised_octant(1, 2), 0.12); }
 
 // Q2: the wall's faces bulge between their nodes, and the volume they enclose is the law's. On the
 // same mesh the inner wall is far closer than P1's (measured: 1.2 % below Lame, P1 10 % above).
-TEST(Cavity, QuadraticElementsWithACurvedWallSettleAtLamesAnswer) {
-  const LameAnswer r = pressurised_octant(2, 2);
-  EXPECT_NEAR(r.pressure, r.expected_pressure, 0.01 * r.expected_pressure);
-  EXPECT_NEAR(r.volume_change, r.expected_volume_change, 0.01 * r.expected_volume_change);
-  EXPECT_NEAR(r.u_outer, r.u_outer_lame, 0.03 * r.u_outer_lame);
-  EXPECT_NEAR(r.u_inner, r.u_lame, 0.03 * r.u_lame);
-}
+TEST(Cavity, QuadraticElementsWithACurvedWallSettleAtLamesAnswer) { expect_lame(pressurised_octant(2, 2), 0.03); }
 
 // The full shell held on the outer faces of a band around its equator, water-filled or empty.
 QuasiStaticSolver held_sphere(dealii::Triangulation<3>& tria, const Material& material, bool with_fluid) {
