@@ -82,10 +82,11 @@ MeshOutcome mesh_volume(const imaging::Volume<float>& volume, MeshRequest reques
   if (request.regions_from_image) {
     float threshold = 0;
     const imaging::Volume<float> labels = image_label_map(volume, request.segmentation, &threshold);
+    const double labelling_s = since(started);
     request.regions_from_image = false;
     request.segmentation = imaging::TissueSegmentation();
     MeshOutcome out = mesh_volume(labels, std::move(request));
-    out.phases.insert(out.phases.begin(), {"image regions", since(started)});
+    out.phases.insert(out.phases.begin(), {"image regions", labelling_s});
     out.thresholded = true, out.threshold_used = threshold;
     return out;
   }
