@@ -187,6 +187,7 @@ config::MeshSpec resolved_mesh_spec(const config::Scene& scene) {
   const double inf = std::numeric_limits<double>::infinity();
   Eigen::Vector3d low(inf, inf, inf), high = -low;
   double radius = 0;
+  bool traced = false;
   for (std::size_t i = 0; i < scene.probes.size(); ++i) {
     const config::Probe& probe = scene.probes[i];
     if (probe.device.trajectory.empty()) continue;  // a PHANTOM or the mouse: no path known beforehand
@@ -198,8 +199,9 @@ config::MeshSpec resolved_mesh_spec(const config::Scene& scene) {
     }
     for (const Eigen::Vector3d& x : path.positions_m) low = low.cwiseMin(x), high = high.cwiseMax(x);
     radius = std::max(radius, probe.radius_m);
+    traced = true;
   }
-  if (!(radius > 0))
+  if (!traced)
     throw std::runtime_error(scene.source.string() +
                              ": meshing.refine.around_probes: no probe has a trajectory (a replay or operator device) "
                              "to refine around; give refine.center_m and radius_m instead");

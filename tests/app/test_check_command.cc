@@ -3,14 +3,13 @@
 #include <yaml-cpp/yaml.h>
 
 #include <filesystem>
-#include <fstream>
-#include <iterator>
 #include <string>
 
 #include <unistd.h>
 
 #include "tests/support/broken_scene.h"
 #include "tests/support/run_command.h"
+#include "tests/support/scene_variant.h"
 
 namespace fetouch::testing {
 namespace {
@@ -44,14 +43,10 @@ TEST(CheckCommand, JsonReportDescribesTheScene) {
 // The default scene with its refinement ball around the probe's path: check prints the ball (its
 // value is checked against the closed form in tests/app/test_probe_refinement.cc).
 TEST(CheckCommand, ReportsTheRefinementBallAroundTheProbes) {
-  std::ifstream in(kScenes + "/fetus_phantom.yaml");
-  std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
   const std::string surface = "    surface: contoured\n";
-  ASSERT_NE(text.find(surface), std::string::npos);
-  text.replace(text.find(surface), surface.size(), surface + "    refine: {around_probes: true, size_m: 0.004}\n");
-  text.replace(text.find("trajectories/"), 13, kScenes + "/trajectories/");
   const auto file = std::filesystem::temp_directory_path() / ("fetouch_check_refine_" + std::to_string(::getpid()) + ".yaml");
-  std::ofstream(file) << text;
+  ASSERT_TRUE(write_scene_variant(kScenes + "/fetus_phantom.yaml", surface,
+                                  surface + "    refine: {around_probes: true, size_m: 0.004}\n", file));
   const auto r = run_command(fetouch("check --no-mesh " + file.string()));
   EXPECT_EQ(r.exit_code, 0) << r.err;
   EXPECT_NE(r.out.find("4 mm within"), std::string::npos) << r.out;
