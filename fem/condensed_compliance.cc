@@ -29,14 +29,21 @@ FullMatrix<double> CondensedCompliance::compute(LinearSystem& system, const std:
   // (K Z = H' - R comes for free); each round then adds P^-1 R, at the cost of 3m products with K
   // and one blocked application of the factorisation.
   std::vector<Vector<double>> basis = z, kb(basis.size(), Vector<double>(n));
-  for (std::size_t k = 0; k < basis.size(); ++k) system.multiply(basis[k], kb[k]);
+  system.multiply(basis, kb);
+  // B'K B and H B, grown by the new directions' rows and columns each round (entries below `known`
+  // hold; B'K B taken symmetric, as it is).
+  FullMatrix<double> gram, hb;
+  unsigned int known = 0;
   for (int round = 0; !solve_columns; ++round) {
     const unsigned int size = static_cast<unsigned int>(basis.size());
-    FullMatrix<double> galerkin(size, size), hb(columns, size);
+    FullMatrix<double> grown(size, size), hb_grown(columns, size);
     for (unsigned int a = 0; a < size; ++a)
-      for (unsigned int b = 0; b < size; ++b) galerkin(a, b) = basis[a] * kb[b];
+      for (unsigned int b = a; b < size; ++b)
+        grown(a, b) = grown(b, a) = b < known ? gram(a, b) : basis[a] * kb[b];
     for (unsigned int a = 0; a < columns; ++a)
-      for (unsigned int b = 0; b < size; ++b) hb(a, b) = h[a] * basis[b];
+      for (unsigned int b = 0; b < size; ++b) hb_grown(a, b) = b < known ? hb(a, b) : h[a] * basis[b];
+    gram = grown, hb = hb_grown, known = size;
+    FullMatrix<double> galerkin = gram;
     galerkin.gauss_jordan();  // (B'K B)^-1
     FullMatrix<double> c(size, columns);
     galerkin.mTmult(c, hb);   // C = (B'K B)^-1 (H B)'
@@ -64,15 +71,14 @@ FullMatrix<double> CondensedCompliance::compute(LinearSystem& system, const std:
     system.apply_factorisation(residuals.data(), corrections.data(), static_cast<int>(columns));
     // The span keeps every direction so far (a block Krylov space): the Galerkin solution in it is
     // the best in the energy norm, as block CG's would be.
-    if (round == 0) basis = z, kb = std::move(kz);
+    if (round == 0) basis = z, kb = std::move(kz), known = 0;
+    std::vector<Vector<double>> d(columns, Vector<double>(n)), kd(columns, Vector<double>(n));
     for (unsigned int k = 0; k < columns; ++k) {
-      Vector<double> d(n), kd(n);
-      std::copy_n(corrections.begin() + std::size_t(k) * n, n, d.begin());
-      system.constraints().distribute(d);
-      system.multiply(d, kd);
-      basis.push_back(std::move(d));
-      kb.push_back(std::move(kd));
+      std::copy_n(corrections.begin() + std::size_t(k) * n, n, d[k].begin());
+      system.constraints().distribute(d[k]);
     }
+    system.multiply(d, kd);
+    for (unsigned int k = 0; k < columns; ++k) basis.push_back(std::move(d[k])), kb.push_back(std::move(kd[k]));
   }
   times.galerkin_residual = std::isfinite(worst) ? worst : 0;
   if (solve_columns) {

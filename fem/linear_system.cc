@@ -125,6 +125,15 @@ void LinearSystem::multiply(const Vector<double>& x, Vector<double>& y) const {
   if (rank_one_c_ != 0) y.add(rank_one_c_ * (*rank_one_g_ * x), *rank_one_g_);
 }
 
+void LinearSystem::multiply(const std::vector<Vector<double>>& x, std::vector<Vector<double>>& y) const {
+  std::vector<const double*> in(x.size());
+  std::vector<double*> out(x.size());
+  for (std::size_t k = 0; k < x.size(); ++k) in[k] = x[k].begin(), out[k] = y[k].begin();
+  tangent_.multiply_columns(in.data(), out.data(), static_cast<int>(x.size()));
+  if (rank_one_c_ != 0)
+    for (std::size_t k = 0; k < x.size(); ++k) y[k].add(rank_one_c_ * (*rank_one_g_ * x[k]), *rank_one_g_);
+}
+
 void LinearSystem::apply_factorisation_to_rank_one_g(Vector<double>& w) {
   w.reinit(d_.n_dofs(), /*omit_zeroing_entries=*/true);
   TangentSystem::SolveStats stats = tangent_.apply_factorisation_to_rank_one_g(w.begin());

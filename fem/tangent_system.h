@@ -73,6 +73,9 @@ class TangentSystem {
   // y = K x; or y = A x for another value array A of the same pattern.
   void multiply(const double* x, double* y) const { multiply(values_.data(), x, y); }
   void multiply(const double* values, const double* x, double* y) const;
+  // y[k] = K x[k] for `columns` vectors at once: K is read once for all of them (the product is
+  // bound by memory bandwidth, and K is most of the bytes).
+  void multiply_columns(const double* const* x, double* const* y, int columns) const;
 
   struct SolveStats {
     int iterations = 0;       // CG iterations (0 when solved directly after a refactorisation)

@@ -56,6 +56,30 @@ TEST(TangentSystem, SolvesExactlyThenByCgOnTheOldFactorisation) {
   EXPECT_EQ(k.factorisations(), 1);
 }
 
+// The blocked product against the closed form: (K x)_i = d x_i - x_{i-1} - x_{i+1} for every
+// vector of a block, whatever the block's size (passes of 4, 3, 2 and 1 vectors).
+TEST(TangentSystem, BlockedProductMatchesTheStencil) {
+  const int n = 37;
+  const double d = 2.5;
+  TangentSystem k;
+  tridiagonal(k, n, d);
+  for (const int columns : {1, 2, 3, 4, 6, 9}) {
+    std::vector<std::vector<double>> x(columns, std::vector<double>(n)), y(columns, std::vector<double>(n, -1));
+    std::vector<const double*> in;
+    std::vector<double*> out;
+    for (int j = 0; j < columns; ++j) {
+      for (int i = 0; i < n; ++i) x[j][i] = std::cos(0.3 * i * (j + 1)) + j;
+      in.push_back(x[j].data()), out.push_back(y[j].data());
+    }
+    k.multiply_columns(in.data(), out.data(), columns);
+    for (int j = 0; j < columns; ++j)
+      for (int i = 0; i < n; ++i) {
+        const double expected = d * x[j][i] - (i > 0 ? x[j][i - 1] : 0) - (i + 1 < n ? x[j][i + 1] : 0);
+        EXPECT_NEAR(y[j][i], expected, 1e-13) << columns << " vectors, vector " << j << ", row " << i;
+      }
+  }
+}
+
 TEST(TangentSystem, IndefiniteMatrixFallsBackToLdl) {
   const int n = 50;
   TangentSystem k;
