@@ -120,6 +120,38 @@ void BM_FemAssembly(benchmark::State& state) {
   for (auto _ : state) state.SetIterationTime(solver.solve(once).assembly_s);
   state.counters["dofs"] = solver.dofs();
 }
+// The linear solver alone against DOFs (issue 38): the block under the two probes' 0.3 N, solved
+// statically, then the first condensed compliance: 6 columns K z = h solved from zero to 1e-9 with
+// the converged tangent. Counters: the multigrid set-up or the factorisation that solve made
+// (setup_ms), CG iterations per column, time per column and per CG iteration. One iteration a case
+// (the set-up is most of a case's time).
+void BM_FemLinearSolve(benchmark::State& state) {
+  const unsigned int n = static_cast<unsigned int>(state.range(0));
+  dealii::Triangulation<3> tria;
+  block(tria, n);
+  const NeoHookean material(lame_lambda(5000, 0.45), lame_mu(5000, 0.45));
+  QuasiStaticSolver solver(tria, material, 1);
+  solver.use_algebraic_multigrid(state.range(1) != 0);
+  solver.prescribe_displacement(4, {true, true, true}, dealii::Tensor<1, 3>());
+  const int a = solver.add_contact_patch(dealii::Point<3>(0.035, 0.04, 0.05), 0.01);
+  const int b = solver.add_contact_patch(dealii::Point<3>(0.065, 0.04, 0.05), 0.01);
+  dealii::Tensor<1, 3> force;
+  force[2] = -0.3;
+  solver.set_patch_force(a, force);
+  solver.set_patch_force(b, force);
+  NewtonSettings newton;
+  const SolveReport report = solver.solve(newton);
+  for (auto _ : state) benchmark::DoNotOptimize(solver.compliance());
+  const ComplianceTimes& c = solver.last_compliance_times();
+  state.counters["dofs"] = solver.dofs();
+  state.counters["static_newton"] = report.total_iterations;
+  state.counters["static_cg_per_newton"] = report.linear_iterations / std::max(1.0, double(report.total_iterations));
+  state.counters["static_setup_ms"] = 1e3 * report.factorisation_s;
+  state.counters["setup_ms"] = 1e3 * c.factorisation_s;
+  state.counters["cg_per_column"] = c.linear_iterations / 6.0;
+  state.counters["ms_per_column"] = 1e3 * c.solves_s / 6;
+  state.counters["ms_per_cg"] = c.linear_iterations > 0 ? 1e3 * c.solves_s / c.linear_iterations : 0.0;
+}
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -141,6 +173,12 @@ int main(int argc, char** argv) {
   large->ArgNames({"degree", "n", "amg", "policy"})->Unit(benchmark::kMillisecond)->Iterations(100);
   for (const int n : {13, 18, 22, 26, 31, 38})
     for (const int amg : {0, 1}) large->Args({1, n, amg, 1});
+  // 17,442 to 418,000 DOFs; the direct path to 191,880 (a factorisation at 418,000 takes minutes).
+  auto* linear = benchmark::RegisterBenchmark("BM_FemLinearSolve", BM_FemLinearSolve);
+  linear->ArgNames({"n", "amg"})->Unit(benchmark::kMillisecond)->Iterations(1);
+  for (const int n : {16, 22, 31, 38, 50})
+    for (const int amg : {0, 1})
+      if (amg == 1 || n < 50) linear->Args({n, amg});
   auto* assembly = benchmark::RegisterBenchmark("BM_FemAssembly", BM_FemAssembly);
   assembly->ArgNames({"degree", "n", "threads"})->Unit(benchmark::kMillisecond)->UseManualTime();
   for (const int threads : {1, 2}) {
