@@ -15,6 +15,7 @@ namespace fetouch::fem {
 
 struct ComplianceTimes {
   double assembly_s = 0, factorisation_s = 0, solves_s = 0;
+  double total_s = 0;  // the whole update: the phases, the products with K and the Galerkin algebra
   int linear_iterations = 0, factorisations = 0;
   double galerkin_residual = 0;  // of the last columns' Galerkin update (0: none)
   bool refined = false;          // the columns were solved again

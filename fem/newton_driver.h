@@ -67,6 +67,7 @@ struct SolveReport {
   std::string failure;
   // Time per phase, seconds: assembly (residual and tangent), factorisation, linear solves.
   double assembly_s = 0, factorisation_s = 0, solve_s = 0;
+  double total_s = 0;  // the whole solve (QuasiStaticSolver::solve): the phases and everything between them
   int linear_iterations = 0;  // CG iterations preconditioned by an earlier factorisation
   int factorisations = 0;
   // A background factorisation was under way during the solve (the worker shares the machine).
