@@ -214,14 +214,6 @@ void TangentSystem::push_values() {
   }
 }
 
-void TangentSystem::multiply(const double* values, const double* x, double* y) const {
-  const int n = static_cast<int>(rows());
-  for (int i = 0; i < n; ++i) {
-    double sum = 0;
-    for (int k = row_start_[i]; k < row_start_[i + 1]; ++k) sum += values[k] * x[columns_[k]];
-    y[i] = sum;
-  }
-}
 
 namespace {
 // y[j] = A x[j], j < M, in one pass over A (CSR): M sums a row, held in registers.
@@ -239,6 +231,10 @@ void multiply_pass(int n, const int* row_start, const int* columns, const double
   }
 }
 }  // namespace
+
+void TangentSystem::multiply(const double* values, const double* x, double* y) const {
+  multiply_pass<1>(static_cast<int>(rows()), row_start_.data(), columns_.data(), values, &x, &y);
+}
 
 void TangentSystem::multiply_columns(const double* const* x, double* const* y, int columns) const {
   const int n = static_cast<int>(rows());
