@@ -101,6 +101,7 @@ struct RecordingWriter::Impl {
   hid_t file = -1;
   struct DeviceSeries {
     std::unique_ptr<Series> time, position, velocity, force, proxy, penetration, normal_force, in_contact;
+    std::unique_ptr<Series> port_energy, passivity_scale;
   };
   std::vector<DeviceSeries> devices;
   std::unique_ptr<Series> frame, time, solve, residual, margin, iterations, converged, eigenvalues, gains, mode;
@@ -151,6 +152,8 @@ RecordingWriter::RecordingWriter(const std::filesystem::path& path, const Record
     d.penetration = std::make_unique<Series>(g, "penetration_m", H5T_NATIVE_DOUBLE, 1, r.name);
     d.normal_force = std::make_unique<Series>(g, "normal_force_n", H5T_NATIVE_DOUBLE, 1, r.name);
     d.in_contact = std::make_unique<Series>(g, "in_contact", H5T_NATIVE_UINT8, 1, r.name);
+    d.port_energy = std::make_unique<Series>(g, "port_energy_j", H5T_NATIVE_DOUBLE, 1, r.name);
+    d.passivity_scale = std::make_unique<Series>(g, "passivity_scale", H5T_NATIVE_DOUBLE, 1, r.name);
     r.devices.push_back(std::move(d));
     H5Gclose(g);
   }
@@ -184,11 +187,12 @@ RecordingWriter::~RecordingWriter() {
 void RecordingWriter::append(int device, const DeviceSample* samples, std::size_t count) {
   Impl::DeviceSeries& d = impl_->devices.at(static_cast<std::size_t>(device));
   std::vector<double> time(count), position(3 * count), velocity(3 * count), force(3 * count), proxy(3 * count),
-      penetration(count), normal(count);
+      penetration(count), normal(count), energy(count), scale(count);
   std::vector<std::uint8_t> contact(count);
   for (std::size_t i = 0; i < count; ++i) {
     const DeviceSample& s = samples[i];
     time[i] = s.time_s, penetration[i] = s.penetration, normal[i] = s.normal_force, contact[i] = s.in_contact;
+    energy[i] = s.port_energy_j, scale[i] = s.passivity_scale;
     for (int k = 0; k < 3; ++k) {
       position[3 * i + k] = s.position[k], velocity[3 * i + k] = s.velocity[k];
       force[3 * i + k] = s.force[k], proxy[3 * i + k] = s.proxy[k];
@@ -202,6 +206,8 @@ void RecordingWriter::append(int device, const DeviceSample* samples, std::size_
   d.penetration->append(penetration.data(), count);
   d.normal_force->append(normal.data(), count);
   d.in_contact->append(contact.data(), count);
+  d.port_energy->append(energy.data(), count);
+  d.passivity_scale->append(scale.data(), count);
 }
 
 void RecordingWriter::append(const FrameRecord& f) {
@@ -383,17 +389,23 @@ Recording read_recording(const std::filesystem::path& path) {
       const auto penetration = read_all(g, "penetration_m", 1, name);
       const auto normal = read_all(g, "normal_force_n", 1, name);
       const auto contact = read_all(g, "in_contact", 1, name);
+      const bool has_passivity = H5Lexists(g, "port_energy_j", H5P_DEFAULT) > 0 &&
+                                 H5Lexists(g, "passivity_scale", H5P_DEFAULT) > 0;  // since 2026-11-26
+      const auto energy = has_passivity ? read_all(g, "port_energy_j", 1, name) : std::vector<double>{};
+      const auto scale = has_passivity ? read_all(g, "passivity_scale", 1, name) : std::vector<double>{};
       H5Gclose(g);
       // Datasets are extended one after the other: a session killed between two keeps the rows
       // every dataset has.
-      const std::size_t rows = std::min({time.size(), position.size() / 3, velocity.size() / 3, force.size() / 3,
-                                         proxy.size() / 3, penetration.size(), normal.size(), contact.size()});
+      std::size_t rows = std::min({time.size(), position.size() / 3, velocity.size() / 3, force.size() / 3,
+                                   proxy.size() / 3, penetration.size(), normal.size(), contact.size()});
+      if (has_passivity) rows = std::min({rows, energy.size(), scale.size()});
       RecordedDevice d;
       d.name = probe;
       d.samples.resize(rows);
       for (std::size_t r = 0; r < rows; ++r) {
         DeviceSample& s = d.samples[r];
         s.time_s = time[r], s.penetration = penetration[r], s.normal_force = normal[r], s.in_contact = contact[r] != 0;
+        if (has_passivity) s.port_energy_j = energy[r], s.passivity_scale = scale[r];
         for (int k = 0; k < 3; ++k) {
           s.position[k] = position[3 * r + k], s.velocity[k] = velocity[3 * r + k];
           s.force[k] = force[3 * r + k], s.proxy[k] = proxy[3 * r + k];

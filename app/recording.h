@@ -44,6 +44,10 @@ struct DeviceSample {
   Eigen::Vector3d force = Eigen::Vector3d::Zero(), proxy = Eigen::Vector3d::Zero();
   double penetration = 0, normal_force = 0;
   bool in_contact = false;
+  // The passivity layer (haptics/passivity.h): the energy that has flowed from the hand into the
+  // rendering (J; negative: the loop handed the hand energy), and the share s of the local model's
+  // force the layer let through (1: untouched). Recordings before 2026-11-26 read back 0 and 1.
+  double port_energy_j = 0, passivity_scale = 1;
 };
 
 struct FrameRecord {

@@ -22,6 +22,17 @@ haptics::HapticLoopSettings loop_settings(const config::Scene& scene) {
   s.safety.max_force_rate_n_per_s = h.max_force_rate_n_per_s;
   s.safety.period_s = s.period_s;
   s.safety.watchdog_timeout_s = h.watchdog_timeout_s;
+  const config::Passivity& p = h.passivity;
+  s.passivity.mode = p.mode == config::PassivityModeType::on        ? haptics::PassivityMode::on
+                     : p.mode == config::PassivityModeType::observe ? haptics::PassivityMode::observe
+                                                                    : haptics::PassivityMode::off;
+  s.passivity.controller = p.controller == config::PassivityControllerType::scaling
+                               ? haptics::PassivityControllerKind::scaling
+                               : haptics::PassivityControllerKind::hannaford_ryu;
+  s.passivity.allowance_j = p.allowance_j;
+  s.passivity.max_step_n = p.max_step_n;
+  s.passivity.recovery_per_s = p.recovery_per_s;
+  s.passivity.period_s = s.period_s;
   return s;
 }
 

@@ -108,6 +108,8 @@ class SessionBase {
     s.penetration = out.penetration;
     s.normal_force = out.normal_force;
     s.in_contact = out.in_contact;
+    s.port_energy_j = out.port_energy_j;
+    s.passivity_scale = out.passivity_scale;
   }
 
   // Ticks to the summary and the recording: `count` ticks of device d.
@@ -159,6 +161,23 @@ class SessionBase {
   std::chrono::steady_clock::time_point last_flush_;
 };
 
+// The layer's counters at the end of a session; the lowest scale is tracked tick by tick.
+std::vector<PassivitySummary> passivity_summary(const haptics::HapticLoop& loop, const std::vector<double>& min_scale) {
+  std::vector<PassivitySummary> out;
+  for (int c = 0; c < loop.contacts(); ++c) {
+    const haptics::PassivityPort& p = loop.passivity(c);
+    PassivitySummary s;
+    s.generation_events = static_cast<long>(p.generation_events());
+    s.generating_ticks = static_cast<long>(p.generating_ticks());
+    s.controller_ticks = static_cast<long>(p.controller_ticks());
+    s.max_controller_force_n = p.max_controller_force_n();
+    s.min_energy_j = p.min_energy_j();
+    s.min_scale = min_scale[static_cast<std::size_t>(c)];
+    out.push_back(s);
+  }
+  return out;
+}
+
 }  // namespace
 
 SessionSummary run_lockstep(haptics::Environment& environment, std::vector<std::unique_ptr<haptics::Device>>& devices,
@@ -178,6 +197,8 @@ SessionSummary run_lockstep(haptics::Environment& environment, std::vector<std::
   std::vector<std::vector<DeviceSample>> pending(static_cast<std::size_t>(m), std::vector<DeviceSample>(batch));
   std::size_t filled = 0;
   std::vector<Eigen::Vector3d> points(static_cast<std::size_t>(m)), last_points(static_cast<std::size_t>(m));
+  std::vector<Eigen::Vector3d> velocities(static_cast<std::size_t>(m));
+  std::vector<double> min_scale(static_cast<std::size_t>(m), 1.0);
   // The buffered ticks to the summary and the recording (flushed every flush_period_s of wall time).
   const auto drain = [&] {
     for (int d = 0; d < m; ++d) base.take_ticks(d, pending[d].data(), filled);
@@ -186,13 +207,17 @@ SessionSummary run_lockstep(haptics::Environment& environment, std::vector<std::
   };
 
   for (long k = 0; k < ticks; ++k) {
-    for (int d = 0; d < m; ++d) points[d] = devices[d]->read().position_m;
+    for (int d = 0; d < m; ++d) {
+      const haptics::DeviceState state = devices[d]->read();
+      points[d] = state.position_m, velocities[d] = state.velocity_m_per_s;
+    }
     // The tick; after one that started a frame the environment answers at once (lockstep), and
     // its update is held from the next frame's first tick.
-    const std::vector<haptics::ContactOutput>& out = session.tick(points);
+    const std::vector<haptics::ContactOutput>& out = session.tick(points, velocities);
     for (int d = 0; d < m; ++d) {
       base.sample(k, points[d], last_points[d], out[d], devices[d]->write(out[d].force), pending[d][filled]);
       last_points[d] = points[d];
+      min_scale[d] = std::min(min_scale[d], out[d].passivity_scale);
     }
     ++filled;
     // A frame just promoted (its first tick): record the update the tick now holds.
@@ -210,6 +235,7 @@ SessionSummary run_lockstep(haptics::Environment& environment, std::vector<std::
   if (progress) progress->finish();
   SessionSummary summary = base.finish();
   summary.first_failure = first_failure;
+  summary.passivity = passivity_summary(loop, min_scale);
   return summary;
 }
 
@@ -271,6 +297,8 @@ SessionSummary run_realtime(haptics::Environment& environment, std::vector<std::
   int fault_device = -1;
   SessionMonitor* const monitor = settings.monitor;
   std::vector<Eigen::Vector3d> points(static_cast<std::size_t>(m)), last(static_cast<std::size_t>(m));
+  std::vector<Eigen::Vector3d> velocities(static_cast<std::size_t>(m));
+  std::vector<double> min_scale(static_cast<std::size_t>(m), 1.0);
   std::vector<DeviceSample> block(static_cast<std::size_t>(m));
   timespec deadline = origin, now{};
   double previous_start = -1;
@@ -290,8 +318,11 @@ SessionSummary run_realtime(haptics::Environment& environment, std::vector<std::
     previous_start = starts[k];
     if (servo && k == 0 && cores.pin_haptic()) haptic_core = cores.haptic;  // the driver's thread, on the haptic core
     if (servo && lateness[k] > 0.5 * period) tick_overruns.fetch_add(1, std::memory_order_relaxed);
-    for (int d = 0; d < m; ++d) points[d] = devices[d]->read().position_m;
-    const std::vector<haptics::ContactOutput>& out = loop.tick(points);
+    for (int d = 0; d < m; ++d) {
+      const haptics::DeviceState state = devices[d]->read();
+      points[d] = state.position_m, velocities[d] = state.velocity_m_per_s;
+    }
+    const std::vector<haptics::ContactOutput>& out = loop.tick(points, velocities);
     if (stop_tick < 0 && settings.stop && settings.stop->load(std::memory_order_relaxed)) stop_tick = k;
     for (int d = 0; d < m && stop_tick < 0; ++d)
       if (const char* f = devices[d]->fault()) fault = f, fault_device = d, stop_tick = k;
@@ -299,6 +330,7 @@ SessionSummary run_realtime(haptics::Environment& environment, std::vector<std::
     for (int d = 0; d < m; ++d) {
       base.sample(k, points[d], last[d], out[d], devices[d]->write(scale * out[d].force), block[d]);
       last[d] = points[d];
+      min_scale[d] = std::min(min_scale[d], out[d].passivity_scale);
       if (monitor && d < SessionMonitor::kMaxDevices) monitor->force_n[d].store(block[d].force.norm(), std::memory_order_relaxed);
     }
     if (monitor) {
@@ -452,6 +484,7 @@ SessionSummary run_realtime(haptics::Environment& environment, std::vector<std::
   summary.ticks = ran;
   summary.stopped = stop_tick >= 0;
   for (const auto& d : devices) summary.recoverable_errors.push_back(d->recoverable_errors());
+  summary.passivity = passivity_summary(loop, min_scale);
   TimingSummary& t = summary.timing;
   starts.resize(static_cast<std::size_t>(ran));
   lateness.resize(static_cast<std::size_t>(ran));

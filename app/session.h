@@ -91,6 +91,16 @@ struct TimingSummary {
   int haptic_core = -1;  // the core the haptic thread had to itself (-1: not pinned)
 };
 
+// The passivity layer's figures for one device (haptics/passivity.h).
+struct PassivitySummary {
+  long generation_events = 0;      // times the port's energy went from >= 0 to below zero
+  long generating_ticks = 0;       // ticks that ended with the port's energy below zero
+  long controller_ticks = 0;       // ticks at which the controller changed the force
+  double max_controller_force_n = 0;
+  double min_energy_j = 0;         // the lowest port energy: the most the loop handed the hand
+  double min_scale = 1;            // the lowest share of the local model's force let through
+};
+
 struct SessionSummary {
   long ticks = 0, frames = 0;
   double solve_p50_s = 0, solve_p99_s = 0, solve_max_s = 0;  // the environment's solve times
@@ -105,6 +115,7 @@ struct SessionSummary {
   std::string fault;                     // the device fault that ended it (empty: none)
   int fault_device = -1;                 // which device had it
   std::vector<long> recoverable_errors;  // per device: recoverable errors (force errors) seen
+  std::vector<PassivitySummary> passivity;  // per device
 };
 
 // Runs until the devices finish (or max_ticks). Allocation happens only outside the tick.

@@ -1,5 +1,6 @@
 // One haptic tick (architecture budget: under 5 us for 4 contacts, compute only): device points in,
-// forces out, through hold, contact geometry, local model and the safety layer. Driven by the
+// forces out, through hold, contact geometry, local model, the passivity layer (argument
+// `passivity`: 0 off, 1 observe, 2 on) and the safety layer. Driven by the
 // lockstep session with fixed gains, so every 50th tick also carries the linear environment's
 // solve (amortised, a few ns); gain selection is the producer's work and is measured by
 // BM_SelectGains4Contacts.
@@ -19,6 +20,7 @@ void BM_HapticTick(benchmark::State& state) {
   const auto hold = static_cast<HoldKind>(state.range(1));
   const int contacts = static_cast<int>(state.range(2));
   HapticLoopSettings settings;
+  settings.passivity.mode = static_cast<PassivityMode>(state.range(3));
   settings.local_model = kind;
   settings.hold = hold;
   settings.schedule_gains = false;
@@ -43,8 +45,8 @@ void BM_HapticTick(benchmark::State& state) {
   }
 }
 BENCHMARK(BM_HapticTick)
-    ->ArgNames({"model", "hold", "contacts"})
-    ->ArgsProduct({{0, 1, 2, 3}, {0, 1}, {1, 4}})
+    ->ArgNames({"model", "hold", "contacts", "passivity"})
+    ->ArgsProduct({{0, 1, 2, 3}, {0, 1}, {1, 4}, {0, 1, 2}})
     ->Unit(benchmark::kNanosecond);
 
 }  // namespace

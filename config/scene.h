@@ -202,6 +202,18 @@ struct Solver {
 
 enum class LocalModelType { p, pi, smith, pi_smith };
 enum class HoldType { zoh, foh };
+enum class PassivityModeType { off, observe, on };
+enum class PassivityControllerType { scaling, hannaford_ryu };
+
+// The passivity layer (haptics/passivity.h): on by default, so a scene that says nothing is
+// protected against a hand that closes the loop.
+struct Passivity {
+  PassivityModeType mode = PassivityModeType::on;
+  PassivityControllerType controller = PassivityControllerType::scaling;
+  double allowance_j = 2e-5;     // energy a contact may hand the hand before the stiffness is scaled
+  double max_step_n = 0.1;       // the controller's force step per tick, at most
+  double recovery_per_s = 0.5;   // how fast a scaled stiffness comes back between contacts
+};
 
 struct Haptics {
   double rate_hz = 1000;
@@ -217,6 +229,7 @@ struct Haptics {
   // The local model's coupling between contacts (the condensed compliance's cross terms): off,
   // each contact renders with its own compliance only, and feels the others one frame late.
   bool coupling = true;
+  Passivity passivity;
 
   // Ticks per solver frame, N; valid once the scene has been validated.
   int ratio(const Solver& solver) const;
@@ -288,6 +301,8 @@ const char* to_string(SelectorKind);
 const char* to_string(LinearSolver);
 const char* to_string(LocalModelType);
 const char* to_string(HoldType);
+const char* to_string(PassivityModeType);
+const char* to_string(PassivityControllerType);
 const char* to_string(DeviceType);
 
 }  // namespace fetouch::config

@@ -23,6 +23,22 @@ const Choices<LocalModelType> kLocalModels{{"p", LocalModelType::p},
                                            {"smith", LocalModelType::smith},
                                            {"pi_smith", LocalModelType::pi_smith}};
 const Choices<HoldType> kHolds{{"zoh", HoldType::zoh}, {"foh", HoldType::foh}};
+const Choices<PassivityModeType> kPassivityModes{
+    {"off", PassivityModeType::off}, {"observe", PassivityModeType::observe}, {"on", PassivityModeType::on}};
+const Choices<PassivityControllerType> kPassivityControllers{{"scaling", PassivityControllerType::scaling},
+                                                             {"hannaford_ryu", PassivityControllerType::hannaford_ryu}};
+
+void read_passivity(MapView& haptics, Passivity& out) {
+  const Entry e = haptics.entry("passivity");
+  MapView map(haptics.reader(), e.value, e.path, e.key_mark,
+              {"mode", "controller", "allowance_j", "max_step_n", "recovery_per_s"});
+  if (!map.valid()) return;
+  map.choice("mode", out.mode, kPassivityModes);
+  map.choice("controller", out.controller, kPassivityControllers);
+  map.number("allowance_j", out.allowance_j, {0, 10, false, false, "0 to 10 J"});
+  map.number("max_step_n", out.max_step_n, {0, 100, true, false, "over 0, up to 100 N"});
+  map.number("recovery_per_s", out.recovery_per_s, {0, 1000, true, false, "over 0, up to 1000 per s"});
+}
 const Choices<DeviceType> kDevices{{"replay", DeviceType::replay},
                                    {"operator", DeviceType::operator_model},
                                    {"phantom", DeviceType::phantom},
@@ -74,8 +90,9 @@ void read_haptics(MapView& scene, Haptics& out) {
   Reader& reader = scene.reader();
   MapView map(reader, e.value, e.path, e.key_mark,
               {"rate_hz", "local_model", "hold", "gains", "robustness_margin", "max_force_n",
-               "max_force_rate_n_per_s", "watchdog_timeout_s", "coupling"});
+               "max_force_rate_n_per_s", "watchdog_timeout_s", "coupling", "passivity"});
   if (!map.valid()) return;
+  if (map.has("passivity")) read_passivity(map, out.passivity);
   map.boolean("coupling", out.coupling);
   map.number("rate_hz", out.rate_hz, plausible::haptic_rate_hz);
   map.choice("local_model", out.local_model, kLocalModels);
@@ -302,6 +319,8 @@ using namespace detail;
 const char* to_string(LinearSolver v) { return name_of(kLinearSolvers, v); }
 const char* to_string(LocalModelType v) { return name_of(kLocalModels, v); }
 const char* to_string(HoldType v) { return name_of(kHolds, v); }
+const char* to_string(PassivityModeType v) { return name_of(kPassivityModes, v); }
+const char* to_string(PassivityControllerType v) { return name_of(kPassivityControllers, v); }
 const char* to_string(DeviceType v) { return name_of(kDevices, v); }
 
 }  // namespace fetouch::config

@@ -43,6 +43,11 @@ HapticLoop::HapticLoop(const HapticLoopSettings& settings, const EnvironmentUpda
   samples_.resize(contacts_);
   outputs_.resize(contacts_);
   safety_.assign(contacts_, ForceSafety(settings.safety));
+  PassivitySettings passivity = settings.passivity;
+  passivity.period_s = settings.period_s;
+  passivity_.assign(contacts_, PassivityPort(passivity));
+  last_points_.assign(contacts_, Eigen::Vector3d::Zero());
+  velocities_.assign(contacts_, Eigen::Vector3d::Zero());
 }
 
 void HapticLoop::prepare(FrameSlot& slot) const {
@@ -98,6 +103,15 @@ void HapticLoop::promote() noexcept {
 }
 
 const std::vector<ContactOutput>& HapticLoop::tick(const std::vector<Eigen::Vector3d>& devices) noexcept {
+  for (int c = 0; c < contacts_; ++c) {
+    velocities_[c] = tick_count_ == 0 ? Eigen::Vector3d::Zero() : Eigen::Vector3d((devices[c] - last_points_[c]) / settings_.period_s);
+    last_points_[c] = devices[c];
+  }
+  return tick(devices, velocities_);
+}
+
+const std::vector<ContactOutput>& HapticLoop::tick(const std::vector<Eigen::Vector3d>& devices,
+                                                   const std::vector<Eigen::Vector3d>& velocities) noexcept {
   const int n = settings_.ratio;
   const int i = static_cast<int>(tick_count_ % n);
   if (i == 0 && tick_count_ > 0) {
@@ -145,7 +159,12 @@ const std::vector<ContactOutput>& HapticLoop::tick(const std::vector<Eigen::Vect
     out.normal_force = force(c);
     out.penetration = penetration_(c);
     out.in_contact = force(c) > 0;
-    out.force = safety_[c].filter(force(c) * normal, age_s);
+    PassivityPort& port = passivity_[c];
+    const Eigen::Vector3d requested = force(c) * normal;
+    out.force = safety_[c].filter(port.filter(devices[c], velocities[c], requested), age_s);
+    port.sent(out.force);
+    out.port_energy_j = port.energy_j();
+    out.passivity_scale = port.scale();
     // In contact the proxy sits on the (predicted) surface: the device moved out by the predicted
     // penetration along the normal; out of contact it is the device point.
     out.proxy = out.in_contact ? Eigen::Vector3d(devices[c] + predicted(c) * normal) : devices[c];
@@ -163,6 +182,13 @@ const std::vector<ContactOutput>& HapticLoop::tick(const std::vector<Eigen::Vect
 
 const std::vector<ContactOutput>& LockstepSession::tick(const std::vector<Eigen::Vector3d>& devices) {
   const std::vector<ContactOutput>& out = loop_.tick(devices);
+  if (loop_.decimated()) answer();
+  return out;
+}
+
+const std::vector<ContactOutput>& LockstepSession::tick(const std::vector<Eigen::Vector3d>& devices,
+                                                        const std::vector<Eigen::Vector3d>& velocities) {
+  const std::vector<ContactOutput>& out = loop_.tick(devices, velocities);
   if (loop_.decimated()) answer();
   return out;
 }

@@ -9,8 +9,10 @@
 //      (contact_frame.h), and the reference force of the Smith predictor, held the same way;
 //   4. the local model on the m penetrations in normal coordinates, with the compliance projected
 //      on the normals, W_n = N' W N (N = blockdiag(n_c)); unilateral: F_c >= 0, reset on release;
-//   5. force F_c n_c on device c through its ForceSafety (finite, clamp, rate limit, watchdog);
-//      the proxy is the device point moved along n_c onto the held (or predicted) surface;
+//   5. force F_c n_c on device c through its PassivityPort (passivity.h: the energy at the port
+//      the device sees, and the stiffness scaled down when the loop with the hand in it hands the
+//      hand energy), then its ForceSafety (finite, clamp, rate limit, watchdog); the proxy is the
+//      device point moved along n_c onto the held (or predicted) surface;
 //   6. at i == 0 the samples (device point, force -F_c n_c on the tissue) are decimated for the
 //      environment; its answer is published before the next frame starts.
 //
@@ -37,6 +39,7 @@
 #include "haptics/local_model.h"
 #include "haptics/lock_free.h"
 #include "haptics/mode_channel.h"
+#include "haptics/passivity.h"
 
 namespace fetouch::haptics {
 
@@ -55,6 +58,8 @@ struct HapticLoopSettings {
   bool coupling = true;
   double integrator_limit_n = 1e300;
   ForceSafetyLimits safety;
+  // The passivity layer per contact; its period is the loop's (period_s), whatever it says.
+  PassivitySettings passivity;
   // Switches of local model and hold asked while running (mode_channel.h); none: the mode stays.
   ModeChannel* modes = nullptr;
 };
@@ -76,6 +81,8 @@ struct ContactOutput {
   double normal_force = 0;                          // F_c from the local model
   double penetration = 0;                           // e_c behind the held surface
   bool in_contact = false;
+  double port_energy_j = 0;      // E: energy from the hand into the rendering so far (passivity.h)
+  double passivity_scale = 1;    // s: the share of the local model's force the layer let through
 };
 
 class HapticLoop {
@@ -83,7 +90,10 @@ class HapticLoop {
   // `initial`: the environment's answer at rest (Environment::initial), held during frame 0.
   HapticLoop(const HapticLoopSettings& settings, const EnvironmentUpdate& initial);
 
-  // One tick with the device points (m of them). Real-time safe.
+  // One tick with the device points and their velocities (m of each). Real-time safe.
+  const std::vector<ContactOutput>& tick(const std::vector<Eigen::Vector3d>& devices,
+                                         const std::vector<Eigen::Vector3d>& velocities) noexcept;
+  // The same with the velocities by backward differences of the points (zero at the first tick).
   const std::vector<ContactOutput>& tick(const std::vector<Eigen::Vector3d>& devices) noexcept;
 
   // True right after a tick that started a frame: samples() holds what to hand the environment.
@@ -118,6 +128,7 @@ class HapticLoop {
   HoldKind hold() const { return hold_; }
   const FrameSlot& newest() const { return slots_[newest_]; }
   const ForceSafety& safety(int contact) const { return safety_[contact]; }
+  const PassivityPort& passivity(int contact) const { return passivity_[contact]; }
   // Frame starts at which no new answer was there (real time: the solve outlasted its frame), and
   // the tick of the first (-1: none). Never in lockstep.
   long late_answers() const { return late_answers_; }
@@ -152,6 +163,8 @@ class HapticLoop {
   std::vector<ContactSample> samples_;
   std::vector<ContactOutput> outputs_;
   std::vector<ForceSafety> safety_;
+  std::vector<PassivityPort> passivity_;
+  std::vector<Eigen::Vector3d> last_points_, velocities_;  // for tick(points) alone
 };
 
 // The lockstep session (replay, tests, studies): after every tick that started a frame, the
@@ -162,6 +175,8 @@ class LockstepSession {
  public:
   LockstepSession(HapticLoop& loop, Environment& environment) : loop_(loop), environment_(environment) {}
   const std::vector<ContactOutput>& tick(const std::vector<Eigen::Vector3d>& devices);
+  const std::vector<ContactOutput>& tick(const std::vector<Eigen::Vector3d>& devices,
+                                         const std::vector<Eigen::Vector3d>& velocities);
   // The producer side alone, after a tick that decimated: solve, prepare, publish.
   void answer();
 

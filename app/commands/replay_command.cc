@@ -228,6 +228,23 @@ void write_summary(std::ostream& out, const ReplayOptions& o, const config::Scen
   json.key("max_force_n").value(s.max_force_n);
   json.key("min_stability_margin").value(s.min_stability_margin);
   json.key("frames_with_unstable_gains").value(s.frames_with_unstable_gains);
+  // The passivity layer per probe (haptics/passivity.h, docs/stability.md).
+  json.key("passivity").begin_object();
+  json.key("mode").value(config::to_string(scene.haptics.passivity.mode));
+  json.key("controller").value(config::to_string(scene.haptics.passivity.controller));
+  json.key("probes").begin_array();
+  for (const PassivitySummary& p : s.passivity) {
+    json.begin_object();
+    json.key("generation_events").value(p.generation_events);
+    json.key("generating_ticks").value(p.generating_ticks);
+    json.key("controller_ticks").value(p.controller_ticks);
+    json.key("max_controller_force_n").value(p.max_controller_force_n);
+    json.key("min_port_energy_j").value(p.min_energy_j);
+    json.key("min_scale").value(p.min_scale);
+    json.end_object();
+  }
+  json.end_array();
+  json.end_object();
   json.key("session_wall_s").value(session_seconds);
   json.key("wall_s").value(seconds);
   if (comparison) {
@@ -404,6 +421,15 @@ int run_replay(const ReplayOptions& o) {
                   t.realtime_priority ? " (SCHED_FIFO)" : " (normal priority)", core.c_str(), 1e3 * t.period_p50_s,
                   1e3 * t.period_p99_s, 1e3 * t.period_max_s, 1e6 * t.lateness_p99_s, 1e6 * t.lateness_max_s,
                   t.tick_overruns, t.frame_overruns, t.skipped_frames);
+    }
+    for (std::size_t p = 0; p < summary.passivity.size() && p < scene.probes.size(); ++p) {
+      const PassivitySummary& ps = summary.passivity[p];
+      std::printf("  passivity %s (%s), %s: %ld generation events, controller on %ld ticks (%.2f %%), largest "
+                  "controller force %.3f N, lowest port energy %.3g mJ, stiffness scaled to %.3f at the least\n",
+                  config::to_string(scene.haptics.passivity.mode), config::to_string(scene.haptics.passivity.controller),
+                  scene.probes[p].name.c_str(), ps.generation_events, ps.controller_ticks,
+                  summary.ticks > 0 ? 100.0 * double(ps.controller_ticks) / double(summary.ticks) : 0.0,
+                  ps.max_controller_force_n, 1e3 * ps.min_energy_j, ps.min_scale);
     }
     std::printf("  wrote %s, %s", recording.string().c_str(), (out / "summary.json").string().c_str());
     if (o.mesh_every > 0) std::printf(" and %s (open in ParaView)", (out / (scene.name + ".pvd")).string().c_str());

@@ -173,6 +173,8 @@ RandomScene random_scene(unsigned int seed, int index) {
     << "\n  hold: " << draw.turn<std::string>("hold", {"zoh", "foh"}) << "\n  gains: auto\n  robustness_margin: "
     << number(draw.turn<double>("margin", {0.0, 0.3, 0.6, 0.9})) << "\n  max_force_n: " << number(max_force) << "\n";
   if (probes == 2) y << "  coupling: " << draw.turn<std::string>("coupling", {"true", "false"}) << "\n";
+  y << "  passivity: {mode: " << draw.turn<std::string>("passivity", {"on", "observe", "off"})
+    << ", controller: " << draw.turn<std::string>("passivity_controller", {"scaling", "hannaford_ryu"}) << "}\n";
 
   // Probes: a poke, slide or squeeze on the top, fast or slow; replayed, or an operator's hand pulled along.
   y << "probes:\n";

@@ -1,0 +1,99 @@
+// The passivity layer through the real `fetouch replay`, on the shipped hard case: a stiff block
+// (1 MPa) under a light, stiff, barely damped grip (stiff_block_grip.yaml). With the layer only
+// observing, the force the device is sent rings between zero and the clamp through the hold (what
+// the issue reported) and the port's energy shows the loop generating; with the shipped default
+// (the layer on) the hold is still and the energy the loop handed the hand stays within a few
+// allowances. The summary's figures are checked against the recording's own series.
+#include <gtest/gtest.h>
+#include <yaml-cpp/yaml.h>
+
+#include <algorithm>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include "app/recording.h"
+#include "tests/support/run_command.h"
+
+namespace fetouch::testing {
+namespace {
+
+namespace fs = std::filesystem;
+
+// The scene with its trajectory made absolute and `extra` added to its haptics section.
+fs::path scene_copy(const fs::path& dir, const std::string& name, const std::string& extra) {
+  const fs::path shipped = fs::path(FETOUCH_SOURCE_DIR) / "config/scenes/stiff_block_grip.yaml";
+  std::ifstream in(shipped);
+  std::stringstream text;
+  text << in.rdbuf();
+  std::string s = text.str();
+  const std::string trajectory = "trajectories/poke_block.csv";
+  s.replace(s.find(trajectory), trajectory.size(), (shipped.parent_path() / trajectory).string());
+  const std::string clamp = "  max_force_n: 8.5\n";
+  s.replace(s.find(clamp), clamp.size(), clamp + extra);
+  fs::create_directories(dir);
+  const fs::path out = dir / (name + ".yaml");
+  std::ofstream(out) << s;
+  return out;
+}
+
+struct Replayed {
+  YAML::Node summary;
+  std::vector<app::DeviceSample> samples;
+};
+
+Replayed replay(const fs::path& dir, const fs::path& scene) {
+  const fs::path out = dir / scene.stem();
+  const auto r = run_command(fetouch("replay -q --json --out " + out.string() + " " + scene.string()));
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  Replayed run;
+  run.summary = YAML::Load(r.out);
+  run.samples = app::read_recording(out / "recording.h5").devices.at(0).samples;
+  return run;
+}
+
+// Peak to peak of the force's magnitude over [from, to] s, and the lowest port energy recorded.
+double swing(const std::vector<app::DeviceSample>& samples, double from, double to) {
+  double low = 1e300, high = -1e300;
+  for (const auto& s : samples)
+    if (s.time_s >= from && s.time_s <= to) low = std::min(low, s.force.norm()), high = std::max(high, s.force.norm());
+  return high - low;
+}
+
+TEST(PassivityReplay, StiffBlockUnderALightGripRingsWithoutTheLayerAndIsStillWithIt) {
+  const fs::path dir = fs::temp_directory_path() / ("fetouch_passivity_" + std::to_string(::getpid()));
+  fs::remove_all(dir);
+  const Replayed observed = replay(dir, scene_copy(dir, "observe", "  passivity: {mode: observe}\n"));
+  const Replayed shipped = replay(dir, scene_copy(dir, "default", ""));
+  ASSERT_EQ(observed.samples.size(), 3001u);
+  ASSERT_EQ(shipped.samples.size(), 3001u);
+
+  // The poke holds its depth from 1.0 s to 2.0 s; the last 0.7 s of it must be still.
+  const double clamp = 8.5;
+  EXPECT_GT(swing(observed.samples, 1.3, 2.0), 0.9 * clamp) << "the hard case must ring at the clamp unprotected";
+  EXPECT_LT(swing(shipped.samples, 1.3, 2.0), 0.05);
+  for (const auto& s : shipped.samples) ASSERT_TRUE(s.force.allFinite() && s.force.norm() <= clamp + 1e-12);
+
+  // The summary reads what the recording holds.
+  const auto lowest = [](const std::vector<app::DeviceSample>& samples) {
+    double e = 0;
+    for (const auto& s : samples) e = std::min(e, s.port_energy_j);
+    return e;
+  };
+  const YAML::Node off = observed.summary["passivity"], on = shipped.summary["passivity"];
+  EXPECT_EQ(off["mode"].as<std::string>(), "observe");
+  EXPECT_EQ(on["mode"].as<std::string>(), "on");
+  EXPECT_NEAR(off["probes"][0]["min_port_energy_j"].as<double>(), lowest(observed.samples), 1e-9);
+  EXPECT_NEAR(on["probes"][0]["min_port_energy_j"].as<double>(), lowest(shipped.samples), 1e-9);
+  EXPECT_LT(lowest(observed.samples), -1.0) << "ringing at 8.5 N hands the hand joules";
+  EXPECT_GT(lowest(shipped.samples), -25 * 2e-5) << "the layer lets a contact lend a few allowances at most";
+  EXPECT_EQ(off["probes"][0]["controller_ticks"].as<long>(), 0);
+  EXPECT_GT(on["probes"][0]["controller_ticks"].as<long>(), 0);
+  double lowest_scale = 1;
+  for (const auto& s : shipped.samples) lowest_scale = std::min(lowest_scale, s.passivity_scale);
+  EXPECT_NEAR(on["probes"][0]["min_scale"].as<double>(), lowest_scale, 1e-12);
+  fs::remove_all(dir);
+}
+
+}  // namespace
+}  // namespace fetouch::testing
