@@ -36,6 +36,22 @@ haptics::HapticLoopSettings loop_settings(const config::Scene& scene) {
   return s;
 }
 
+std::vector<haptics::HandEvent> hand_events(const config::HandModel& hand) {
+  std::vector<haptics::HandEvent> out;
+  for (const config::HandEvent& e : hand.events) {
+    haptics::HandEvent h;
+    h.kind = e.type == config::HandEventType::release ? haptics::HandEventKind::release
+             : e.type == config::HandEventType::grip  ? haptics::HandEventKind::grip
+             : e.type == config::HandEventType::tremor ? haptics::HandEventKind::tremor
+                                                       : haptics::HandEventKind::impact;
+    h.at_s = e.at_s, h.factor = e.factor, h.ramp_s = e.ramp_s;
+    h.frequency_hz = e.frequency_hz, h.amplitude_m = e.amplitude_m, h.speed_m_per_s = e.speed_m_per_s;
+    h.direction = Eigen::Vector3d(e.direction[0], e.direction[1], e.direction[2]);
+    out.push_back(h);
+  }
+  return out;
+}
+
 haptics::WorkspaceMapping workspace_mapping(const config::Device& device) {
   haptics::WorkspaceMapping m;
   const config::Vec3* axes[3] = {&device.x_axis, &device.y_axis, &device.z_axis};
@@ -57,7 +73,8 @@ std::unique_ptr<haptics::Device> make_device(const config::Probe& probe, const c
       if (!path) throw std::runtime_error("probe " + probe.name + ": a " + config::to_string(d.type) + " device needs a trajectory");
       if (d.type == config::DeviceType::replay) return std::make_unique<haptics::ReplayDevice>(*path, settings.period_s);
       return std::make_unique<haptics::VirtualOperator>(
-          *path, haptics::HandParameters{d.hand.mass_kg, d.hand.stiffness_n_per_m, d.hand.damping_n_s_per_m}, settings.period_s);
+          *path, haptics::HandParameters{d.hand.mass_kg, d.hand.stiffness_n_per_m, d.hand.damping_n_s_per_m}, settings.period_s,
+          hand_events(d.hand));
     case config::DeviceType::phantom: {
       haptics::PhantomSettings p;
       p.name = d.phantom_name;

@@ -15,6 +15,9 @@ haptics::HapticLoopSettings loop_settings(const config::Scene& scene);
 // The device's workspace mapping and buttons as the scene gives them.
 haptics::WorkspaceMapping workspace_mapping(const config::Device& device);
 
+// The operator hand's scripted events (docs/devices.md), as the device takes them.
+std::vector<haptics::HandEvent> hand_events(const config::HandModel& hand);
+
 // The probe's device: a replay or a virtual operator along `path` (required for those), or a
 // PHANTOM opened with the scene's mapping and clamp. Throws std::runtime_error in one line naming
 // the probe and why (for a PHANTOM: the library, the entry point or the device error, and what to do).

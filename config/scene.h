@@ -239,10 +239,22 @@ struct Haptics {
 
 enum class DeviceType { replay, operator_model, phantom, mouse };
 
+// Something the virtual operator's hand does at a time (haptics::HandEvent; docs/devices.md).
+enum class HandEventType { release, grip, tremor, impact };
+struct HandEvent {
+  HandEventType type = HandEventType::release;
+  double at_s = 0;
+  double factor = 3, ramp_s = 0.01;               // grip
+  double frequency_hz = 10, amplitude_m = 2e-4;   // tremor
+  double speed_m_per_s = 0.2;                     // impact
+  Vec3 direction{0, 0, -1};                       // tremor, impact
+};
+
 struct HandModel {  // the virtual operator: a mass pulled to the target by a spring and a damper
   double mass_kg = 0.3;
   double stiffness_n_per_m = 300;
   double damping_n_s_per_m = 8;
+  std::vector<HandEvent> events;
 };
 
 struct Device {

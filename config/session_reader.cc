@@ -179,6 +179,57 @@ void read_workspace(MapView& device, Device& out) {
   }
 }
 
+const Choices<HandEventType> kHandEvents{{"release", HandEventType::release},
+                                         {"grip", HandEventType::grip},
+                                         {"tremor", HandEventType::tremor},
+                                         {"impact", HandEventType::impact}};
+
+// hand.events: a list of {type, at_s, ...}; each type takes only its own keys.
+void read_hand_events(MapView& hand, std::vector<HandEvent>& out) {
+  const Entry e = hand.entry("events");
+  Reader& reader = hand.reader();
+  if (!e.value.IsSequence()) {
+    reader.error(e.value_mark, e.path,
+                 "expected a list of events (- {type: release, at_s: 1.2}), got " + detail::describe_node(e.value));
+    return;
+  }
+  for (size_t i = 0; i < e.value.size(); ++i) {
+    const YAML::Node item = e.value[i];
+    MapView map(reader, item, e.path + "[" + std::to_string(i) + "]", item.Mark(),
+                {"type", "at_s", "factor", "ramp_s", "frequency_hz", "amplitude_m", "speed_m_per_s", "direction"});
+    if (!map.valid()) continue;
+    HandEvent event;
+    if (!map.choice("type", event.type, kHandEvents, Need::required)) continue;
+    map.number("at_s", event.at_s, {0, 3600, false, false, "0 to 3600 s"}, Need::required);
+    const std::string by = std::string("by a ") + name_of(kHandEvents, event.type) + " event";
+    switch (event.type) {
+      case HandEventType::release:
+        reject_keys(map, {"factor", "ramp_s", "frequency_hz", "amplitude_m", "speed_m_per_s", "direction"}, by);
+        break;
+      case HandEventType::grip:
+        reject_keys(map, {"frequency_hz", "amplitude_m", "speed_m_per_s", "direction"}, by);
+        map.number("factor", event.factor, {0, 100, true, false, "over 0, up to 100"}, Need::required);
+        map.number("ramp_s", event.ramp_s, {0, 10, false, false, "0 to 10 s"});
+        break;
+      case HandEventType::tremor:
+        reject_keys(map, {"factor", "ramp_s", "speed_m_per_s"}, by);
+        map.number("frequency_hz", event.frequency_hz, {0, 1000, true, false, "over 0, up to 1000 Hz"}, Need::required);
+        map.number("amplitude_m", event.amplitude_m, {0, 0.05, false, false, "0 to 5 cm"}, Need::required);
+        map.vec3("direction", event.direction);
+        break;
+      case HandEventType::impact:
+        reject_keys(map, {"factor", "ramp_s", "frequency_hz", "amplitude_m"}, by);
+        map.number("speed_m_per_s", event.speed_m_per_s, {0, 10, false, false, "0 to 10 m/s"}, Need::required);
+        map.vec3("direction", event.direction);
+        break;
+    }
+    if ((event.type == HandEventType::tremor || event.type == HandEventType::impact) && map.has("direction") &&
+        event.direction[0] == 0 && event.direction[1] == 0 && event.direction[2] == 0)
+      reader.error(map.entry("direction").value_mark, map.child_path("direction"), "a direction must not be zero");
+    out.push_back(event);
+  }
+}
+
 void read_device(MapView& probe, Device& out) {
   const Entry e = probe.entry("device");
   Reader& reader = probe.reader();
@@ -198,11 +249,12 @@ void read_device(MapView& probe, Device& out) {
       if (!map.has("hand")) break;
       const Entry h = map.entry("hand");
       MapView hand(reader, h.value, h.path, h.key_mark,
-                   {"mass_kg", "stiffness_n_per_m", "damping_n_s_per_m"});
+                   {"mass_kg", "stiffness_n_per_m", "damping_n_s_per_m", "events"});
       if (!hand.valid()) break;
       hand.number("mass_kg", out.hand.mass_kg, plausible::hand_mass_kg);
       hand.number("stiffness_n_per_m", out.hand.stiffness_n_per_m, plausible::hand_stiffness_n_per_m);
       hand.number("damping_n_s_per_m", out.hand.damping_n_s_per_m, plausible::hand_damping_n_s_per_m);
+      if (hand.has("events")) read_hand_events(hand, out.hand.events);
       break;
     }
     case DeviceType::phantom:

@@ -221,34 +221,107 @@ void hand_transition(const HandParameters& hand, double period_s, Eigen::Matrix2
 
 }  // namespace
 
-VirtualOperator::VirtualOperator(const Trajectory& trajectory, const HandParameters& hand, double period_s)
-    : targets_(trajectory.resampled(period_s)), stiffness_(hand.stiffness_n_per_m), damping_(hand.damping_n_s_per_m) {
+namespace {
+
+void check_event(const HandEvent& e) {
+  const auto fail = [](const std::string& what) { throw std::invalid_argument("operator: " + what); };
+  if (!(e.at_s >= 0) || !std::isfinite(e.at_s)) fail("an event's time must be 0 s or later, not " + std::to_string(e.at_s));
+  switch (e.kind) {
+    case HandEventKind::release: break;
+    case HandEventKind::grip:
+      if (!(e.factor > 0) || !std::isfinite(e.factor)) fail("a grip's factor must be positive, not " + std::to_string(e.factor));
+      if (!(e.ramp_s >= 0) || !std::isfinite(e.ramp_s)) fail("a grip's ramp must be 0 s or longer, not " + std::to_string(e.ramp_s));
+      break;
+    case HandEventKind::tremor:
+      if (!(e.frequency_hz > 0) || !std::isfinite(e.frequency_hz)) fail("a tremor's frequency must be positive");
+      if (!(e.amplitude_m >= 0) || !std::isfinite(e.amplitude_m)) fail("a tremor's amplitude must be 0 or more");
+      [[fallthrough]];
+    case HandEventKind::impact:
+      if (!(e.direction.norm() > 0) || !e.direction.allFinite()) fail("a tremor's or impact's direction must not be zero");
+      if (!std::isfinite(e.speed_m_per_s)) fail("an impact's speed must be finite");
+      break;
+  }
+}
+
+}  // namespace
+
+VirtualOperator::VirtualOperator(const Trajectory& trajectory, const HandParameters& hand, double period_s,
+                                 const std::vector<HandEvent>& events)
+    : targets_(trajectory.resampled(period_s)) {
   check_hand(hand);
   if (targets_.empty()) throw std::invalid_argument("operator: an empty trajectory");
-  // The target's velocity, by central differences (one-sided at the ends).
+  for (const HandEvent& e : events) check_event(e);
   const std::size_t n = targets_.size();
+  const auto tick_of = [period_s](double t) { return static_cast<std::size_t>(std::llround(t / period_s)); };
+  std::vector<HandEvent> ordered = events;
+  std::stable_sort(ordered.begin(), ordered.end(), [](const HandEvent& a, const HandEvent& b) { return a.at_s < b.at_s; });
+
+  // Tremor moves the target; the target's velocity follows from it.
+  for (const HandEvent& e : ordered)
+    if (e.kind == HandEventKind::tremor)
+      for (std::size_t k = tick_of(e.at_s); k < n; ++k)
+        targets_[k] += e.amplitude_m * std::sin(2 * M_PI * e.frequency_hz * (double(k) * period_s - e.at_s)) *
+                       e.direction.normalized();
+  // The target's velocity, by central differences (one-sided at the ends).
   target_velocities_.assign(n, Eigen::Vector3d::Zero());
   for (std::size_t k = 0; k < n && n > 1; ++k) {
     const std::size_t a = k == 0 ? 0 : k - 1, b = k + 1 == n ? k : k + 1;
     target_velocities_[k] = (targets_[b] - targets_[a]) / (double(b - a) * period_s);
   }
-  hand_transition(hand, period_s, phi_, gamma_);
+
+  // The grip's multiplier on k and b, tick by tick: each event rewrites it from its own tick on.
+  std::vector<double> multiplier(n, 1.0);
+  for (const HandEvent& e : ordered) {
+    const std::size_t from = tick_of(e.at_s);
+    if (from >= n) continue;
+    if (e.kind == HandEventKind::release) {
+      std::fill(multiplier.begin() + static_cast<long>(from), multiplier.end(), 0.0);
+    } else if (e.kind == HandEventKind::grip) {
+      const double base = multiplier[from];
+      const double ramp = std::max(1.0, std::round(e.ramp_s / period_s));
+      for (std::size_t k = from; k < n; ++k)
+        multiplier[k] = base * (1 + (e.factor - 1) * std::min(1.0, double(k - from + 1) / ramp));
+    } else if (e.kind == HandEventKind::impact) {
+      impact_ticks_.push_back(static_cast<long>(from));
+      impact_velocities_.push_back(e.speed_m_per_s * e.direction.normalized());
+    }
+  }
+  grip_of_tick_.resize(n);
+  std::vector<double> known;
+  for (std::size_t k = 0; k < n; ++k) {
+    const auto at = std::find(known.begin(), known.end(), multiplier[k]);
+    if (at != known.end()) {
+      grip_of_tick_[k] = static_cast<int>(at - known.begin());
+      continue;
+    }
+    Grip g;
+    g.stiffness = multiplier[k] * hand.stiffness_n_per_m;
+    g.damping = multiplier[k] * hand.damping_n_s_per_m;
+    hand_transition(HandParameters{hand.mass_kg, g.stiffness, g.damping}, period_s, g.phi, g.gamma);
+    grip_of_tick_[k] = static_cast<int>(known.size());
+    known.push_back(multiplier[k]);
+    grips_.push_back(g);
+  }
   position_ = targets_.front();
   velocity_.setZero();
 }
 
 DeviceState VirtualOperator::read() noexcept {
   if (tick_ > 0) {
-    // Over the last tick: its target and the force rendered at it, held.
+    // Over the last tick: its target, the grip then and the force rendered at it, held.
     const std::size_t k = static_cast<std::size_t>(std::min<long>(tick_ - 1, static_cast<long>(targets_.size()) - 1));
+    const Grip& g = grips_[static_cast<std::size_t>(grip_of_tick_[k])];
     const Eigen::Vector3d force = force_.allFinite() ? force_ : Eigen::Vector3d::Zero();
-    const Eigen::Vector3d u = stiffness_ * targets_[k] + damping_ * target_velocities_[k] + force;
+    const Eigen::Vector3d u = g.stiffness * targets_[k] + g.damping * target_velocities_[k] + force;
     for (int d = 0; d < 3; ++d) {
-      const double x = phi_(0, 0) * position_[d] + phi_(0, 1) * velocity_[d] + gamma_[0] * u[d];
-      const double v = phi_(1, 0) * position_[d] + phi_(1, 1) * velocity_[d] + gamma_[1] * u[d];
+      const double x = g.phi(0, 0) * position_[d] + g.phi(0, 1) * velocity_[d] + g.gamma[0] * u[d];
+      const double v = g.phi(1, 0) * position_[d] + g.phi(1, 1) * velocity_[d] + g.gamma[1] * u[d];
       position_[d] = x, velocity_[d] = v;
     }
   }
+  // An impact: the hand arrives at its speed from this tick on.
+  while (next_impact_ < impact_ticks_.size() && impact_ticks_[next_impact_] <= tick_)
+    velocity_ = impact_velocities_[next_impact_++];
   ++tick_;
   DeviceState s;
   s.position_m = position_;

@@ -92,11 +92,32 @@ struct HandParameters {
   double damping_n_s_per_m = 8;
 };
 
+// What an operator may do that tries the loop (passivity-and-identification.md, docs/devices.md):
+//   - release at t: the hand's spring and damper drop to zero in one tick; only the mass (the
+//     device's own) is left, and nothing pulls it to the target any more;
+//   - grip at t: the spring and damper are multiplied by `factor`, reached linearly over ramp_s
+//     (a grip tightening x3 within 10 ms);
+//   - tremor from t: the target moves by amplitude_m sin(2 pi f (time - t)) along `direction`
+//     (physiological tremor: 6-12 Hz, 0.05-0.5 mm);
+//   - impact at t: the hand's velocity becomes speed_m_per_s along `direction` (a probe arriving
+//     at 200 mm/s).
+enum class HandEventKind { release, grip, tremor, impact };
+struct HandEvent {
+  HandEventKind kind = HandEventKind::release;
+  double at_s = 0;
+  double factor = 3, ramp_s = 0.01;                    // grip
+  double frequency_hz = 10, amplitude_m = 2e-4;        // tremor
+  double speed_m_per_s = 0.2;                          // impact
+  Eigen::Vector3d direction = -Eigen::Vector3d::UnitZ();  // tremor, impact (normalised on use)
+};
+
 class VirtualOperator final : public Device {
  public:
   // Starts at rest on the trajectory's first point. Throws std::invalid_argument for a mass,
-  // stiffness or damping that is not positive (damping may be zero).
-  VirtualOperator(const Trajectory& trajectory, const HandParameters& hand, double period_s);
+  // stiffness or damping that is not positive (damping may be zero), or an event that makes no
+  // sense (a negative time, a grip factor not positive, a tremor or impact with a zero direction).
+  VirtualOperator(const Trajectory& trajectory, const HandParameters& hand, double period_s,
+                  const std::vector<HandEvent>& events = {});
   DeviceState read() noexcept override;
   Eigen::Vector3d write(const Eigen::Vector3d& force_n) noexcept override {
     force_ = force_n;
@@ -107,10 +128,19 @@ class VirtualOperator final : public Device {
   const Eigen::Vector3d& velocity() const { return velocity_; }
 
  private:
+  // The hand over one tick: exp(A T), A = [0 1; -k/m -b/m], and int_0^T exp(A s) ds [0; 1/m],
+  // with the k and b it pulls with.
+  struct Grip {
+    Eigen::Matrix2d phi;
+    Eigen::Vector2d gamma;
+    double stiffness = 0, damping = 0;
+  };
   std::vector<Eigen::Vector3d> targets_, target_velocities_;
-  Eigen::Matrix2d phi_;    // exp(A T), A = [0 1; -k/m -b/m]
-  Eigen::Vector2d gamma_;  // int_0^T exp(A s) ds [0; 1/m]
-  double stiffness_, damping_;
+  std::vector<Grip> grips_;             // the hand's grips: [0] as given, then those events make
+  std::vector<int> grip_of_tick_;       // per tick, which grip
+  std::vector<long> impact_ticks_;      // ticks at which an impact sets the velocity, in order
+  std::vector<Eigen::Vector3d> impact_velocities_;
+  std::size_t next_impact_ = 0;
   Eigen::Vector3d position_, velocity_, force_ = Eigen::Vector3d::Zero();
   long tick_ = 0;
 };

@@ -7,6 +7,7 @@
 #include <unistd.h>
 
 #include <cmath>
+#include <complex>
 #include <filesystem>
 #include <fstream>
 
@@ -163,10 +164,92 @@ TEST(VirtualOperator, TracksARampWithAtMostHalfATickOfLag) {
   EXPECT_LE(x.x(), c * 2.0 + 1e-12);
 }
 
+// Released at 0.5 s while moving: nothing pulls or damps it any more, so with no force it flies on
+// at the speed it had, x(t) = x(t_r) + v(t_r) (t - t_r) (to rounding).
+TEST(VirtualOperator, ReleasedHandFliesOnAtItsSpeed) {
+  Trajectory ramp;
+  ramp.times_s = {0, 2};
+  ramp.positions_m = {Eigen::Vector3d::Zero(), Eigen::Vector3d(0, 0, -0.04)};  // -20 mm/s
+  HandEvent release;
+  release.kind = HandEventKind::release;
+  release.at_s = 0.5;
+  VirtualOperator op(ramp, HandParameters{0.3, 300, 8}, 1e-3, {release});
+  DeviceState at_release;
+  for (int k = 0; k <= 500; ++k) at_release = op.read();  // tick 500 integrated the last held grip
+  double worst = 0;
+  for (int k = 501; k <= 1500; ++k) {
+    const DeviceState s = op.read();
+    const double expected = at_release.position_m.z() + at_release.velocity_m_per_s.z() * (k - 500) * 1e-3;
+    worst = std::max(worst, std::abs(s.position_m.z() - expected));
+  }
+  EXPECT_LT(worst, 1e-13);
+}
+
+// A grip tightened x3 over 10 ms: held still against 3 N, the hand's deflection F / k shrinks to a
+// third (from 10 mm to 3.33 mm).
+TEST(VirtualOperator, TighterGripDeflectsByForceOverTheNewStiffness) {
+  Trajectory still;
+  still.times_s = {0, 6};
+  still.positions_m = {Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero()};
+  HandEvent grip;
+  grip.kind = HandEventKind::grip;
+  grip.at_s = 3;
+  grip.factor = 3;
+  VirtualOperator op(still, HandParameters{0.3, 300, 8}, 1e-3, {grip});
+  Eigen::Vector3d x;
+  for (int k = 0; k < 3000; ++k) x = op.next(Eigen::Vector3d(0, 0, 3));
+  EXPECT_NEAR(x.z(), 3.0 / 300, 1e-6);
+  for (int k = 3000; k < 6000; ++k) x = op.next(Eigen::Vector3d(0, 0, 3));
+  EXPECT_NEAR(x.z(), 3.0 / 900, 1e-6);
+}
+
+// Tremor at f moves the target by A sin(w t); the hand (m x'' + b x' + k x = k x_t + b x_t')
+// follows with the gain |k + i w b| / |k - m w^2 + i w b|, reached once the start has died away.
+TEST(VirtualOperator, TremorReachesTheHandThroughItsTransferFunction) {
+  Trajectory still;
+  still.times_s = {0, 4};
+  still.positions_m = {Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero()};
+  HandEvent tremor;
+  tremor.kind = HandEventKind::tremor;
+  tremor.frequency_hz = 10;
+  tremor.amplitude_m = 2e-4;
+  tremor.direction = Eigen::Vector3d(0, 0, 2);  // normalised on use
+  const double m = 0.3, k = 300, b = 8, w = 2 * M_PI * 10;
+  VirtualOperator op(still, HandParameters{m, k, b}, 1e-3, {tremor});
+  double peak = 0;
+  for (int t = 0; t <= 4000; ++t) {
+    const double z = op.read().position_m.z();
+    if (t > 3000) peak = std::max(peak, std::abs(z));
+  }
+  const double gain = std::abs(std::complex<double>(k, w * b)) / std::abs(std::complex<double>(k - m * w * w, w * b));
+  // 1 % : sampling the peak at 1 kHz (cos(w T / 2) = 0.9995) and the central-difference target
+  // velocity (sin(w T) / (w T) = 0.9993) are both far inside it.
+  EXPECT_NEAR(peak, gain * 2e-4, 0.01 * gain * 2e-4);
+}
+
+TEST(VirtualOperator, ImpactSetsTheHandsSpeed) {
+  HandEvent impact;
+  impact.kind = HandEventKind::impact;
+  impact.at_s = 0.2;
+  impact.speed_m_per_s = 0.2;
+  VirtualOperator op(step_target(1.0), HandParameters{0.3, 300, 8}, 1e-3, {impact});
+  DeviceState s;
+  for (int k = 0; k <= 200; ++k) s = op.read();
+  EXPECT_NEAR(s.velocity_m_per_s.z(), -0.2, 1e-15);
+  EXPECT_NEAR(s.velocity_m_per_s.x(), 0, 1e-15);
+}
+
 TEST(VirtualOperator, RefusesANonPhysicalHand) {
   EXPECT_THROW(VirtualOperator(step_target(1), HandParameters{0, 300, 8}, 1e-3), std::invalid_argument);
   EXPECT_THROW(VirtualOperator(step_target(1), HandParameters{0.3, -1, 8}, 1e-3), std::invalid_argument);
   EXPECT_THROW(VirtualOperator(step_target(1), HandParameters{0.3, 300, -1}, 1e-3), std::invalid_argument);
+  HandEvent bad;
+  bad.kind = HandEventKind::grip;
+  bad.factor = 0;
+  EXPECT_THROW(VirtualOperator(step_target(1), HandParameters{}, 1e-3, {bad}), std::invalid_argument);
+  bad.kind = HandEventKind::impact;
+  bad.direction.setZero();
+  EXPECT_THROW(VirtualOperator(step_target(1), HandParameters{}, 1e-3, {bad}), std::invalid_argument);
 }
 
 }  // namespace
