@@ -91,7 +91,7 @@ Eigen::Vector3d PassivityPort::scaling(const Eigen::Vector3d& requested) noexcep
   const bool touching = request > 0;
   if (touching && !touching_) bank_ = settings_.allowance_j;  // a contact begins: nothing lent yet
   touching_ = touching;
-  // The bank is A plus the port's energy since the contact began, less A for each halving: it is
+  // The bank is A plus the port's energy since the contact began, plus A for each halving: it is
   // below zero only when the contact has handed the hand (halvings + 1) A more than it was given,
   // whatever the springs hold (held energy only raises it).
   if (bank_ < 0 && touching) {

@@ -20,14 +20,16 @@
 //     a light, stiff, barely damped grip (or a hand that lets go) moves that bound far below what a
 //     stiff tissue asks for; no damper added on top of the wall helps (a virtual damper only
 //     tightens the bound), and a bounded additive force cannot keep pace with K v. The observer
-//     drives s: a bank, re-armed to A (the allowance) when a contact begins, gains the port's
-//     energy each tick; when the bank falls below zero the loop has handed the hand A more than
-//     it put in since the contact began, and the ceiling of s halves (the bank is re-armed).
-//     s follows the ceiling down at most max_step_n / |f_req| a tick (no force step over
-//     max_step_n from the controller), and the ceiling recovers towards 1 at recovery_per_s, so a
-//     hand that steadies is given back its stiffness; if it rings again, the ceiling halves again.
-//     A contact whose bank never runs dry (a hand whose damping absorbs the hold's leak, the
-//     nominal case) is never scaled. No division by a velocity: s acts on positions' energy alone.
+//     drives s: a bank, set to A (the allowance) when a contact begins, gains the port's energy
+//     each tick; when it falls below zero the contact has handed the hand A more than it was
+//     given, the ceiling of s halves and the bank gets another A (a halving waits until s has
+//     reached the last one). Held energy only raises the bank: a compressed tissue springing back
+//     is not generation. s follows the ceiling down at most max_step_n / |f_req| a tick (no force
+//     step over max_step_n from the controller); the ceiling climbs back towards 1 at
+//     recovery_per_s only between contacts, since raising the stiffness of a compressed spring
+//     itself hands its owner energy. A contact whose bank never runs dry (a hand whose damping
+//     absorbs the hold's leak, the nominal case) is never scaled. No division by a velocity: s
+//     acts on the port's energy alone.
 //   - hannaford_ryu (the baseline of Hannaford & Ryu 2002): when E < 0, a damper
 //     alpha = -E / (T |v|^2) dissipates the whole deficit over the next tick, c = alpha v
 //     (f = f_req - alpha v); below a velocity floor it does nothing (alpha would be unbounded).
