@@ -1,6 +1,5 @@
 #include "app/session.h"
 
-#include <Eigen/Eigenvalues>
 #include <pthread.h>
 #include <sched.h>
 #include <sys/prctl.h>
@@ -18,6 +17,7 @@
 #include <thread>
 
 #include "app/progress.h"
+#include "app/session_rows.h"
 #include "app/realtime_cores.h"
 #include "haptics/lock_free.h"
 
@@ -37,31 +37,6 @@ void spread(const std::vector<double>& values, double& p50, double& p99, double&
   p50 = percentile(values, 0.5), p99 = percentile(values, 0.99), max = percentile(values, 1);
 }
 
-// /frames/mode's codes (docs/replay.md) are the enumerators' values.
-static_assert(static_cast<int>(haptics::LocalModelKind::p) == 0 && static_cast<int>(haptics::LocalModelKind::pi) == 1 &&
-              static_cast<int>(haptics::LocalModelKind::smith) == 2 && static_cast<int>(haptics::LocalModelKind::pi_smith) == 3 &&
-              static_cast<int>(haptics::HoldKind::zoh) == 0 && static_cast<int>(haptics::HoldKind::foh) == 1);
-
-// The frame's row of the recording: the solve's status, the eigenvalues of the condensed normal
-// stiffness W_n^-1, the gains chosen for it and the mode they are for.
-FrameRecord frame_record(const haptics::FrameSlot& slot, double time_s) {
-  FrameRecord f;
-  f.frame = slot.update.frame;
-  f.time_s = time_s;
-  f.solve_s = slot.update.status.seconds;
-  f.residual = slot.update.status.residual;
-  f.newton_iterations = slot.update.status.iterations;
-  f.converged = slot.update.status.converged;
-  const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eigen(slot.normal_compliance);
-  for (int i = static_cast<int>(eigen.eigenvalues().size()) - 1; i >= 0; --i)
-    f.stiffness_eigenvalues.push_back(eigen.eigenvalues()[i] > 0 ? 1 / eigen.eigenvalues()[i] : 0);
-  f.proportional_gain = slot.gains.proportional;
-  f.integral_gain = slot.gains.integral;
-  f.local_model = static_cast<int>(slot.local_model);
-  f.hold = static_cast<int>(slot.hold);
-  f.stability_margin = 1 - slot.selection.spectral_radius;
-  return f;
-}
 
 // What both clocks share: the checks, the recording, the number of ticks, and the summary's
 // per-frame and per-tick figures.
@@ -161,22 +136,6 @@ class SessionBase {
   std::chrono::steady_clock::time_point last_flush_;
 };
 
-// The layer's counters at the end of a session; the lowest scale is tracked tick by tick.
-std::vector<PassivitySummary> passivity_summary(const haptics::HapticLoop& loop, const std::vector<double>& min_scale) {
-  std::vector<PassivitySummary> out;
-  for (int c = 0; c < loop.contacts(); ++c) {
-    const haptics::PassivityPort& p = loop.passivity(c);
-    PassivitySummary s;
-    s.generation_events = static_cast<long>(p.generation_events());
-    s.generating_ticks = static_cast<long>(p.generating_ticks());
-    s.controller_ticks = static_cast<long>(p.controller_ticks());
-    s.max_controller_force_n = p.max_controller_force_n();
-    s.min_energy_j = p.min_energy_j();
-    s.min_scale = min_scale[static_cast<std::size_t>(c)];
-    out.push_back(s);
-  }
-  return out;
-}
 
 }  // namespace
 
@@ -198,7 +157,6 @@ SessionSummary run_lockstep(haptics::Environment& environment, std::vector<std::
   std::size_t filled = 0;
   std::vector<Eigen::Vector3d> points(static_cast<std::size_t>(m)), last_points(static_cast<std::size_t>(m));
   std::vector<Eigen::Vector3d> velocities(static_cast<std::size_t>(m));
-  std::vector<double> min_scale(static_cast<std::size_t>(m), 1.0);
   // The buffered ticks to the summary and the recording (flushed every flush_period_s of wall time).
   const auto drain = [&] {
     for (int d = 0; d < m; ++d) base.take_ticks(d, pending[d].data(), filled);
@@ -217,7 +175,6 @@ SessionSummary run_lockstep(haptics::Environment& environment, std::vector<std::
     for (int d = 0; d < m; ++d) {
       base.sample(k, points[d], last_points[d], out[d], devices[d]->write(out[d].force), pending[d][filled]);
       last_points[d] = points[d];
-      min_scale[d] = std::min(min_scale[d], out[d].passivity_scale);
     }
     ++filled;
     // A frame just promoted (its first tick): record the update the tick now holds.
@@ -235,7 +192,7 @@ SessionSummary run_lockstep(haptics::Environment& environment, std::vector<std::
   if (progress) progress->finish();
   SessionSummary summary = base.finish();
   summary.first_failure = first_failure;
-  summary.passivity = passivity_summary(loop, min_scale);
+  summary.passivity = passivity_summary(loop);
   return summary;
 }
 
@@ -298,7 +255,6 @@ SessionSummary run_realtime(haptics::Environment& environment, std::vector<std::
   SessionMonitor* const monitor = settings.monitor;
   std::vector<Eigen::Vector3d> points(static_cast<std::size_t>(m)), last(static_cast<std::size_t>(m));
   std::vector<Eigen::Vector3d> velocities(static_cast<std::size_t>(m));
-  std::vector<double> min_scale(static_cast<std::size_t>(m), 1.0);
   std::vector<DeviceSample> block(static_cast<std::size_t>(m));
   timespec deadline = origin, now{};
   double previous_start = -1;
@@ -330,7 +286,6 @@ SessionSummary run_realtime(haptics::Environment& environment, std::vector<std::
     for (int d = 0; d < m; ++d) {
       base.sample(k, points[d], last[d], out[d], devices[d]->write(scale * out[d].force), block[d]);
       last[d] = points[d];
-      min_scale[d] = std::min(min_scale[d], out[d].passivity_scale);
       if (monitor && d < SessionMonitor::kMaxDevices) monitor->force_n[d].store(block[d].force.norm(), std::memory_order_relaxed);
     }
     if (monitor) {
@@ -484,7 +439,7 @@ SessionSummary run_realtime(haptics::Environment& environment, std::vector<std::
   summary.ticks = ran;
   summary.stopped = stop_tick >= 0;
   for (const auto& d : devices) summary.recoverable_errors.push_back(d->recoverable_errors());
-  summary.passivity = passivity_summary(loop, min_scale);
+  summary.passivity = passivity_summary(loop);
   TimingSummary& t = summary.timing;
   starts.resize(static_cast<std::size_t>(ran));
   lateness.resize(static_cast<std::size_t>(ran));

@@ -106,6 +106,7 @@ Eigen::Vector3d PassivityPort::scaling(const Eigen::Vector3d& requested) noexcep
   // s follows the ceiling, its force step bounded by max_step_n (any step at all out of contact).
   const double step = touching ? settings_.max_step_n / request : 1.0;
   scale_ = std::clamp(ceiling_, scale_ - step, scale_ + step);
+  min_scale_ = std::min(min_scale_, scale_);
   return scale_ * requested;
 }
 

@@ -93,6 +93,7 @@ class PassivityPort {
   // The lowest E seen (J): how much energy the loop generated at worst.
   double min_energy_j() const { return min_energy_; }
   double scale() const { return scale_; }  // s (scaling)
+  double min_scale() const { return min_scale_; }  // the lowest s so far
 
  private:
   Eigen::Vector3d scaling(const Eigen::Vector3d& requested) noexcept;
@@ -103,7 +104,7 @@ class PassivityPort {
   Eigen::Vector3d last_position_ = Eigen::Vector3d::Zero(), last_force_ = Eigen::Vector3d::Zero();
   Eigen::Vector3d control_ = Eigen::Vector3d::Zero();
   double energy_ = 0, min_energy_ = 0, max_control_ = 0;
-  double bank_ = 0, scale_ = 1, ceiling_ = 1;
+  double bank_ = 0, scale_ = 1, ceiling_ = 1, min_scale_ = 1;
   bool touching_ = false;
   std::uint64_t controller_ticks_ = 0, generating_ticks_ = 0, generation_events_ = 0;
 };

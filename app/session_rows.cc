@@ -1,0 +1,50 @@
+#include "app/session_rows.h"
+
+#include <Eigen/Eigenvalues>
+
+namespace fetouch::app {
+
+// /frames/mode's codes (docs/replay.md) are the enumerators' values.
+static_assert(static_cast<int>(haptics::LocalModelKind::p) == 0 && static_cast<int>(haptics::LocalModelKind::pi) == 1 &&
+              static_cast<int>(haptics::LocalModelKind::smith) == 2 && static_cast<int>(haptics::LocalModelKind::pi_smith) == 3 &&
+              static_cast<int>(haptics::HoldKind::zoh) == 0 && static_cast<int>(haptics::HoldKind::foh) == 1);
+
+// The frame's row of the recording: the solve's status, the eigenvalues of the condensed normal
+// stiffness W_n^-1, the gains chosen for it and the mode they are for.
+FrameRecord frame_record(const haptics::FrameSlot& slot, double time_s) {
+  FrameRecord f;
+  f.frame = slot.update.frame;
+  f.time_s = time_s;
+  f.solve_s = slot.update.status.seconds;
+  f.residual = slot.update.status.residual;
+  f.newton_iterations = slot.update.status.iterations;
+  f.converged = slot.update.status.converged;
+  const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eigen(slot.normal_compliance);
+  for (int i = static_cast<int>(eigen.eigenvalues().size()) - 1; i >= 0; --i)
+    f.stiffness_eigenvalues.push_back(eigen.eigenvalues()[i] > 0 ? 1 / eigen.eigenvalues()[i] : 0);
+  f.proportional_gain = slot.gains.proportional;
+  f.integral_gain = slot.gains.integral;
+  f.local_model = static_cast<int>(slot.local_model);
+  f.hold = static_cast<int>(slot.hold);
+  f.stability_margin = 1 - slot.selection.spectral_radius;
+  return f;
+}
+
+// The passivity layer's counters at the end of a session.
+std::vector<PassivitySummary> passivity_summary(const haptics::HapticLoop& loop) {
+  std::vector<PassivitySummary> out;
+  for (int c = 0; c < loop.contacts(); ++c) {
+    const haptics::PassivityPort& p = loop.passivity(c);
+    PassivitySummary s;
+    s.generation_events = static_cast<long>(p.generation_events());
+    s.generating_ticks = static_cast<long>(p.generating_ticks());
+    s.controller_ticks = static_cast<long>(p.controller_ticks());
+    s.max_controller_force_n = p.max_controller_force_n();
+    s.min_energy_j = p.min_energy_j();
+    s.min_scale = p.min_scale();
+    out.push_back(s);
+  }
+  return out;
+}
+
+}  // namespace fetouch::app
