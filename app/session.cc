@@ -61,8 +61,10 @@ class SessionBase {
       for (const auto& d : devices) ticks_ = std::max(ticks_, d->ticks());
     }
     summary_.ticks = ticks_;
-    if (settings.keep_forces)
+    if (settings.keep_forces) {
       summary_.forces.assign(static_cast<std::size_t>(m_), std::vector<Eigen::Vector3d>(static_cast<std::size_t>(ticks_)));
+      summary_.positions = summary_.forces;
+    }
     solve_times_.reserve(static_cast<std::size_t>(ticks_ / settings.loop.ratio + 2));
     last_flush_ = std::chrono::steady_clock::now();
   }
@@ -93,7 +95,10 @@ class SessionBase {
       summary_.max_force_n = std::max(summary_.max_force_n, samples[i].force.norm());
       if (settings_.keep_forces) {
         const long k = std::lround(samples[i].time_s / settings_.loop.period_s);
-        if (k >= 0 && k < ticks_) summary_.forces[d][static_cast<std::size_t>(k)] = samples[i].force;
+        if (k >= 0 && k < ticks_) {
+          summary_.forces[d][static_cast<std::size_t>(k)] = samples[i].force;
+          summary_.positions[d][static_cast<std::size_t>(k)] = samples[i].position;
+        }
       }
     }
     if (writer_) writer_->append(d, samples, count);

@@ -96,6 +96,7 @@ struct PassivitySummary {
   long generation_events = 0;      // times the port's energy went from >= 0 to below zero
   long generating_ticks = 0;       // ticks that ended with the port's energy below zero
   long controller_ticks = 0;       // ticks at which the controller changed the force
+  long adjusting_ticks = 0;       // ticks at which the controller acted (s moved; HR's damper pushed)
   double max_controller_force_n = 0;
   double min_energy_j = 0;         // the lowest port energy: the most the loop handed the hand
   double min_scale = 1;            // the lowest share of the local model's force let through
@@ -110,6 +111,7 @@ struct SessionSummary {
   double min_stability_margin = 1;   // 1 - spectral radius of the chosen gains, over the frames
   long frames_with_unstable_gains = 0;
   std::vector<std::vector<Eigen::Vector3d>> forces;  // per device, per tick (keep_forces)
+  std::vector<std::vector<Eigen::Vector3d>> positions;  // per device, per tick (keep_forces)
   TimingSummary timing;
   bool stopped = false;                  // ended by a stop request or a fault, not by its end
   std::string fault;                     // the device fault that ended it (empty: none)

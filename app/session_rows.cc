@@ -39,6 +39,7 @@ std::vector<PassivitySummary> passivity_summary(const haptics::HapticLoop& loop)
     s.generation_events = static_cast<long>(p.generation_events());
     s.generating_ticks = static_cast<long>(p.generating_ticks());
     s.controller_ticks = static_cast<long>(p.controller_ticks());
+    s.adjusting_ticks = static_cast<long>(p.adjusting_ticks());
     s.max_controller_force_n = p.max_controller_force_n();
     s.min_energy_j = p.min_energy_j();
     s.min_scale = p.min_scale();

@@ -9,6 +9,11 @@
 
 namespace fetouch::haptics {
 
+namespace {
+// A force passed on at less than this share of the request was cut (scaled or clamped).
+constexpr double kUncutShare = 0.999;
+}  // namespace
+
 HapticLoop::HapticLoop(const HapticLoopSettings& settings, const EnvironmentUpdate& initial)
     : settings_(settings),
       contacts_(static_cast<int>(initial.frames.size())),
@@ -45,6 +50,7 @@ HapticLoop::HapticLoop(const HapticLoopSettings& settings, const EnvironmentUpda
   safety_.assign(contacts_, ForceSafety(settings.safety));
   PassivitySettings passivity = settings.passivity;
   passivity.period_s = settings.period_s;
+  passivity.max_force_n = settings.safety.max_force_n;
   passivity_.assign(contacts_, PassivityPort(passivity));
   last_points_.assign(contacts_, Eigen::Vector3d::Zero());
   velocities_.assign(contacts_, Eigen::Vector3d::Zero());
@@ -161,8 +167,14 @@ const std::vector<ContactOutput>& HapticLoop::tick(const std::vector<Eigen::Vect
     out.in_contact = force(c) > 0;
     PassivityPort& port = passivity_[c];
     const Eigen::Vector3d requested = force(c) * normal;
-    out.force = safety_[c].filter(port.filter(devices[c], velocities[c], requested), age_s);
+    const Eigen::Vector3d passed = port.filter(devices[c], velocities[c], requested);
+    out.force = safety_[c].filter(passed, age_s);
     port.sent(out.force);
+    // The tissue is pressed with the force the hand is sent (action and reaction at the device),
+    // not the one the local model asked for. An integrator whose force was cut (scaled or clamped)
+    // holds until it passes again: behind the cut it would only wind up.
+    const double passed_normal = out.force.dot(normal);
+    local_model_.set_integrating(c, !(out.force.norm() < kUncutShare * requested.norm()));
     out.port_energy_j = port.energy_j();
     out.passivity_scale = port.scale();
     // In contact the proxy sits on the (predicted) surface: the device moved out by the predicted
@@ -171,8 +183,8 @@ const std::vector<ContactOutput>& HapticLoop::tick(const std::vector<Eigen::Vect
     if (decimated_) {
       ContactSample& sample = samples_[c];
       sample.position = devices[c];
-      sample.force = -force(c) * normal;
-      sample.normal_force = force(c);
+      sample.force = -passed_normal * normal;
+      sample.normal_force = passed_normal;
       sample.in_contact = out.in_contact;
     }
   }

@@ -30,7 +30,8 @@ LocalModel::LocalModel(LocalModelKind kind, int contacts)
       integrator_(Eigen::VectorXd::Zero(contacts)),
       force_(Eigen::VectorXd::Zero(contacts)),
       error_(Eigen::VectorXd::Zero(contacts)),
-      rhs_(Eigen::VectorXd::Zero(contacts)) {}
+      rhs_(Eigen::VectorXd::Zero(contacts)),
+      integrating_mask_(Eigen::VectorXd::Ones(contacts)) {}
 
 void LocalModel::set_kind(LocalModelKind kind) noexcept {
   const bool had_integrator = has_integrator();
@@ -75,7 +76,11 @@ const Eigen::VectorXd& LocalModel::step(const Eigen::VectorXd& device,
     if (has_integrator()) force_ += integrator_;
   }
   if (has_integrator() && integrating_) {
-    integrator_ += gains_.integral * error_;
+    for (Eigen::Index c = 0; c < integrator_.size(); ++c) {
+      const double step = gains_.integral * error_(c);
+      // A held contact may still unwind (a step towards less force), never wind up further.
+      if (integrating_mask_(c) > 0 || step * integrator_(c) < 0) integrator_(c) += step;
+    }
     integrator_ = integrator_.cwiseMax(-integrator_limit_).cwiseMin(integrator_limit_);
   }
   if (unilateral_)

@@ -16,7 +16,10 @@
 //   with Smith:     G = (I + Kh W)^-1,  F = G (Kh (x_h - x_held + W F_ref) + s),
 //                   s+ = s + I (x_h - x_held - W (F - F_ref))
 // Anti-windup: s is clamped to |s| <= s_max per contact, and set_integrating(false) pauses it (the
-// loop does so while an environment answer is late: the frame's integration is then complete).
+// loop does so while an environment answer is late: the frame's integration is then complete);
+// set_integrating(c, false) holds one contact's against winding up (the loop does so while the
+// layers after the model cut that contact's force: an integrator behind a scaled or clamped force
+// only winds up); it may still unwind, so a held contact can let go.
 // Unilateral contact (set_unilateral, the 3D loop's setting; the analysis keeps it off): a contact
 // whose force comes out F <= 0 is not touching: F = 0 and s = 0 (reset on contact loss). Since F
 // passes through 0 continuously as the device leaves, neither onset nor release steps the force.
@@ -64,6 +67,9 @@ class LocalModel {
   void set_integrator_limit(double limit) { integrator_limit_ = limit; }
   void set_unilateral(bool unilateral) { unilateral_ = unilateral; }
   void set_integrating(bool integrating) { integrating_ = integrating; }
+  // Per contact (anti-windup): a contact whose force the layers after the model cut (the passivity
+  // layer's scale, the safety clamp) winds its integrator no further until its force passes again.
+  void set_integrating(Eigen::Index contact, bool integrating) noexcept { integrating_mask_(contact) = integrating ? 1.0 : 0.0; }
   const LocalModelGains& gains() const { return gains_; }
 
   // One tick: returns F(k) and advances s.
@@ -89,6 +95,7 @@ class LocalModel {
   Eigen::MatrixXd loop_matrix_;      // I + Kh W
   Eigen::PartialPivLU<Eigen::MatrixXd> loop_lu_;
   Eigen::VectorXd integrator_, force_, error_, rhs_;
+  Eigen::VectorXd integrating_mask_;  // 1: the contact integrates, 0: it holds
 };
 
 }  // namespace fetouch::haptics

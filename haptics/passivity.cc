@@ -48,6 +48,7 @@ void check(const PassivitySettings& s) {
   positive(s.recovery_per_s, "recovery_per_s");
   positive(s.max_step_n, "max_step_n");
   positive(s.velocity_floor_m_per_s, "velocity_floor_m_per_s");
+  positive(s.max_force_n, "the device's largest force");
   if (!(s.allowance_j >= 0) || !std::isfinite(s.allowance_j))
     throw std::invalid_argument("passivity: allowance_j must be zero or more and finite, not " + std::to_string(s.allowance_j));
 }
@@ -75,10 +76,21 @@ Eigen::Vector3d PassivityPort::filter(const Eigen::Vector3d& position, const Eig
   }
 
   const Eigen::Vector3d before = control_;
-  const Eigen::Vector3d force = settings_.controller == PassivityControllerKind::scaling
-                                    ? scaling(requested)
-                                    : Eigen::Vector3d(requested - hannaford_ryu(velocity));
-  control_ = requested - force;
+  const double scale_before = scale_;
+  Eigen::Vector3d force;
+  if (settings_.controller == PassivityControllerKind::scaling) {
+    force = scaling(requested);
+    adjusting_ticks_ += scale_ != scale_before && requested.squaredNorm() > 0;  // out of contact s moves unfelt
+  } else {
+    const Eigen::Vector3d damping = hannaford_ryu(velocity);
+    adjusting_ticks_ += damping.squaredNorm() > 0;
+    force = requested - damping;
+  }
+  const auto reachable = [this](const Eigen::Vector3d& f) {
+    const double size = f.norm();
+    return size > settings_.max_force_n ? Eigen::Vector3d(f * (settings_.max_force_n / size)) : f;
+  };
+  control_ = reachable(requested) - reachable(force);
   if (control_.squaredNorm() > 0 || before.squaredNorm() > 0) {
     controller_ticks_ += control_ != before;
     max_control_ = std::max(max_control_, control_.norm());

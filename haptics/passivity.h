@@ -63,6 +63,9 @@ struct PassivitySettings {
   double max_step_n = 0.1;         // the controller's force changes by at most this per tick
   double recovery_per_s = 0.5;     // scaling: how fast the ceiling of s climbs back towards 1
   double velocity_floor_m_per_s = 1e-4;  // hannaford_ryu: no damping below this speed
+  // The device's largest force (the safety layer's clamp): the controller's force is measured
+  // against what the device could have been sent, not against a request beyond its reach.
+  double max_force_n = 1e300;
 };
 
 // Throws std::invalid_argument naming the first value out of range (a period, allowance or bound
@@ -83,10 +86,16 @@ class PassivityPort {
 
   const PassivitySettings& settings() const { return settings_; }
   double energy_j() const { return energy_; }                          // E
-  const Eigen::Vector3d& controller_force() const { return control_; }  // c of the last tick
+  // c of the last tick: the change the controller made to the force the device can be sent (both
+  // the request and the controller's answer clamped to max_force_n).
+  const Eigen::Vector3d& controller_force() const { return control_; }
   // Ticks at which the controller changed the force, ticks that ended with E < 0 ("generation"),
   // the number of times E went from >= 0 to < 0 (generation events), and the largest |c|.
   std::uint64_t controller_ticks() const { return controller_ticks_; }
+  // Ticks at which the controller itself acted: scaling, those in contact at which s moved (a
+  // halving and its descent; its recovery between contacts is not felt); hannaford_ryu, those at which its damper pushed. Under a steady s < 1
+  // the force differs from the request (controller_ticks) while the controller does nothing new.
+  std::uint64_t adjusting_ticks() const { return adjusting_ticks_; }
   std::uint64_t generating_ticks() const { return generating_ticks_; }
   std::uint64_t generation_events() const { return generation_events_; }
   double max_controller_force_n() const { return max_control_; }
@@ -106,7 +115,7 @@ class PassivityPort {
   double energy_ = 0, min_energy_ = 0, max_control_ = 0;
   double bank_ = 0, scale_ = 1, ceiling_ = 1, min_scale_ = 1;
   bool touching_ = false;
-  std::uint64_t controller_ticks_ = 0, generating_ticks_ = 0, generation_events_ = 0;
+  std::uint64_t controller_ticks_ = 0, adjusting_ticks_ = 0, generating_ticks_ = 0, generation_events_ = 0;
 };
 
 }  // namespace fetouch::haptics

@@ -238,6 +238,7 @@ void write_summary(std::ostream& out, const ReplayOptions& o, const config::Scen
     json.key("generation_events").value(p.generation_events);
     json.key("generating_ticks").value(p.generating_ticks);
     json.key("controller_ticks").value(p.controller_ticks);
+    json.key("adjusting_ticks").value(p.adjusting_ticks);
     json.key("max_controller_force_n").value(p.max_controller_force_n);
     json.key("min_port_energy_j").value(p.min_energy_j);
     json.key("min_scale").value(p.min_scale);
@@ -424,11 +425,11 @@ int run_replay(const ReplayOptions& o) {
     }
     for (std::size_t p = 0; p < summary.passivity.size() && p < scene.probes.size(); ++p) {
       const PassivitySummary& ps = summary.passivity[p];
-      std::printf("  passivity %s (%s), %s: %ld generation events, controller on %ld ticks (%.2f %%), largest "
+      std::printf("  passivity %s (%s), %s: %ld generation events, controller on %ld ticks (%.2f %%, acting on %ld), largest "
                   "controller force %.3f N, lowest port energy %.3g mJ, stiffness scaled to %.3f at the least\n",
                   config::to_string(scene.haptics.passivity.mode), config::to_string(scene.haptics.passivity.controller),
                   scene.probes[p].name.c_str(), ps.generation_events, ps.controller_ticks,
-                  summary.ticks > 0 ? 100.0 * double(ps.controller_ticks) / double(summary.ticks) : 0.0,
+                  summary.ticks > 0 ? 100.0 * double(ps.controller_ticks) / double(summary.ticks) : 0.0, ps.adjusting_ticks,
                   ps.max_controller_force_n, 1e3 * ps.min_energy_j, ps.min_scale);
     }
     std::printf("  wrote %s, %s", recording.string().c_str(), (out / "summary.json").string().c_str());
