@@ -51,6 +51,20 @@ int run_study_hard_cases(const HardCasesOptions& options);
 // --random N: exit 0 only when every drawn scene ran to its end or failed with a physical reason.
 int run_study_random(const HardCasesOptions& options);
 
+// `fetouch study passivity`: the hand in the loop, swept (app/study/passivity_study.cc). The box's
+// defaults: masses and grip stiffnesses of Fu & Cavusoglu 2012's stylus grips (0.02-0.57 kg,
+// 230-1,040 N/m) and the stiff grip (2,000 N/m); dampings from a barely damped grip (0.5 N s/m)
+// to the default hand's 8 N s/m.
+struct PassivityOptions : StudyOptions {
+  std::vector<double> masses{0.02, 0.1, 0.2, 0.4, 0.57};
+  std::vector<double> stiffnesses{230, 500, 1040, 2000};
+  std::vector<double> dampings{0.5, 2, 5, 8};
+  std::vector<std::string> events{"none", "release", "grip", "tremor8", "tremor10", "tremor12", "impact"};
+  std::vector<std::string> modes{"off", "on", "hannaford_ryu"};
+  double duration_s = 0;  // of the trajectory; 0: all of it
+};
+int run_study_passivity(const PassivityOptions& options);
+
 // Refuses an --out that would replace the scene, its mesh or a trajectory; creates the folder.
 // Throws std::invalid_argument naming both.
 void prepare_study_folder(const std::filesystem::path& out, const std::string& scene_file, const config::Scene& scene);

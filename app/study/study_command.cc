@@ -1,4 +1,4 @@
-// `fetouch study accuracy|effects|hard-cases` on the command line (app/study/study.h, docs/study.md).
+// `fetouch study accuracy|effects|hard-cases|passivity` on the command line (app/study/study.h, docs/study.md).
 #include <CLI/CLI.hpp>
 #include <mpi.h>
 
@@ -99,6 +99,30 @@ void add_study_command(CLI::App& parent, int& exit_code) {
   effects->add_option("--repeat", e->repeat, "Runs of each configuration; each frame's time is its fastest")
       ->check(CLI::Range(1, 20))->capture_default_str();
   effects->callback([e, &exit_code]() { exit_code = guarded(*e, [e]() { return run_study_effects(*e); }); });
+
+  auto p = std::make_shared<PassivityOptions>();
+  CLI::App* passivity = study->add_subcommand("passivity", "The loop with a hand in it: a box of hands and events, the layer off and on");
+  passivity->footer(
+      "Holds every probe with the virtual operator along its trajectory and sweeps the hand (mass, grip\n"
+      "stiffness, damping) and what it does (none, release, grip, tremor8/10/12, impact, at the middle\n"
+      "of the default hand's contact), each with the passivity layer off, on, and with plain\n"
+      "Hannaford-Ryu. Judges each run by one criterion (ringing above ~90 Hz for 0.3 s without halving, or\n"
+      "chatter at the clamp), and the nominal run (default hand, no event) by the controller's share\n"
+      "of ticks and the felt stiffness on against off. Writes OUT/table.csv, OUT/report.md and plots.");
+  passivity->add_option("scene", p->scene, "Scene file (.yaml)")->required()->check(CLI::ExistingFile);
+  add_common(passivity, *p, "fetouch-study-passivity");
+  passivity->add_option("--masses", p->masses, "Hand masses, kg")->delimiter(',')->capture_default_str();
+  passivity->add_option("--stiffnesses", p->stiffnesses, "Grip stiffnesses, N/m")->delimiter(',')->capture_default_str();
+  passivity->add_option("--dampings", p->dampings, "Grip dampings, N s/m")->delimiter(',')->capture_default_str();
+  passivity->add_option("--events", p->events, "none, release, grip, tremor8, tremor10, tremor12, impact")->delimiter(',');
+  passivity->add_option("--modes", p->modes, "off, on, hannaford_ryu")->delimiter(',');
+  passivity->add_option("--duration", p->duration_s, "Seconds of the trajectory to replay (0: all)")
+      ->check(CLI::Range(0.0, 3600.0))->capture_default_str();
+  passivity->add_flag("--quick", p->quick, "A corner of the box: masses 0.02,0.57, stiffnesses 230,2000, dampings 0.5,8; events none, release, tremor10, impact");
+  passivity->callback([p, &exit_code]() {
+    if (p->quick) p->masses = {0.02, 0.57}, p->stiffnesses = {230, 2000}, p->dampings = {0.5, 8}, p->events = {"none", "release", "tremor10", "impact"};
+    exit_code = guarded(*p, [p]() { return run_study_passivity(*p); });
+  });
 
   auto h = std::make_shared<HardCasesOptions>();
   CLI::App* hard = study->add_subcommand("hard-cases", "The solver's hard cases on a scene's tissue (or a block)");

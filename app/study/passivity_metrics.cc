@@ -1,0 +1,76 @@
+#include "app/study/passivity_metrics.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+namespace fetouch::app {
+
+Oscillation detect_oscillation(const std::vector<double>& force, double period_s, double clamp_n,
+                               const OscillationCriterion& c) {
+  Oscillation out;
+  const long n = static_cast<long>(force.size());
+  const long half = std::max(1, c.smoothing_ticks / 2);
+  const long window = std::max(1L, std::lround(c.window_s / period_s));
+  // A running sum gives the centred moving average in one pass.
+  std::vector<double> prefix(static_cast<std::size_t>(n) + 1, 0.0);
+  for (long k = 0; k < n; ++k) prefix[static_cast<std::size_t>(k) + 1] = prefix[static_cast<std::size_t>(k)] + force[static_cast<std::size_t>(k)];
+  // Each window's swing; then the longest stretch of ringing windows whose last window swings at
+  // least decay_share of its first (from any window on: a big transient before a steady ring does
+  // not hide the ring).
+  std::vector<double> swing;
+  for (long start = half; start + window <= n - half; start += window) {
+    double lo = std::numeric_limits<double>::infinity(), hi = -lo;
+    for (long k = start; k < start + window; ++k) {
+      const double mean = (prefix[static_cast<std::size_t>(k + half + 1)] - prefix[static_cast<std::size_t>(k - half)]) / (2 * half + 1);
+      const double rest = force[static_cast<std::size_t>(k)] - mean;
+      lo = std::min(lo, rest), hi = std::max(hi, rest);
+    }
+    out.ringing_ptp_n = std::max(out.ringing_ptp_n, hi - lo);
+    swing.push_back(hi - lo);
+  }
+  long longest = 0;
+  for (std::size_t a = 0; a < swing.size(); ++a) {
+    if (!(swing[a] > c.ringing_n)) continue;
+    for (std::size_t b = a; b < swing.size() && swing[b] > c.ringing_n; ++b)
+      if (swing[b] >= c.decay_share * swing[a]) longest = std::max(longest, static_cast<long>(b - a + 1));
+  }
+  out.ringing_s = static_cast<double>(longest * window) * period_s;
+  for (long k = 0; k < n; ++k) {
+    if (!(force[static_cast<std::size_t>(k)] >= 0.99 * clamp_n)) continue;
+    for (long j = std::max(0L, k - 5); j <= std::min(n - 1, k + 5); ++j)
+      if (force[static_cast<std::size_t>(j)] <= 0.01 * clamp_n) {
+        ++out.chatter_ticks;
+        break;
+      }
+  }
+  out.oscillates = out.ringing_s >= c.sustained_s - 1e-9 || out.chatter_ticks >= c.chatter_ticks;
+  return out;
+}
+
+double felt_stiffness(const std::vector<Eigen::Vector3d>& forces, const std::vector<Eigen::Vector3d>& positions) {
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  const std::size_t n = std::min(forces.size(), positions.size());
+  std::size_t first = n, peak = 0;
+  double largest = 0;
+  for (std::size_t k = 0; k < n; ++k) {
+    const double f = forces[k].norm();
+    if (f > 0 && first == n) first = k;
+    if (f > largest) largest = f, peak = k;
+  }
+  if (first >= n || !(largest > 0)) return nan;
+  const Eigen::Vector3d press = -forces[peak] / largest;
+  double sx = 0, sy = 0, sxx = 0, sxy = 0;
+  long count = 0;
+  for (std::size_t k = first; k <= peak; ++k) {
+    const double f = forces[k].norm();
+    if (f < 0.2 * largest || f > 0.8 * largest) continue;
+    const double depth = (positions[k] - positions[first]).dot(press);
+    sx += depth, sy += f, sxx += depth * depth, sxy += depth * f, ++count;
+  }
+  if (count < 10) return nan;
+  const double var = sxx - sx * sx / count;
+  return var > 0 ? (sxy - sx * sy / count) / var : nan;
+}
+
+}  // namespace fetouch::app

@@ -1,0 +1,87 @@
+// The passivity study's judge (app/study/passivity_metrics.h) on signals whose answer is known: a
+// steady ring well above tremor is oscillation, physiological tremor is not, a ring that dies out
+// is not, one that grows is, and a force jumping between nothing and the clamp is chatter. The felt
+// stiffness of a linear spring pressed along any direction is its constant.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <vector>
+
+#include <Eigen/Geometry>
+
+#include "app/study/passivity_metrics.h"
+
+namespace fetouch::app {
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+constexpr double kT = 1e-3;
+
+// 2 s at 1 kHz: 2 N held, plus amplitude a(t) sin(2 pi f t) from 0.5 s on.
+std::vector<double> held_with(double frequency_hz, double amplitude_n, double growth_per_s) {
+  std::vector<double> f(2000);
+  for (std::size_t k = 0; k < f.size(); ++k) {
+    const double t = k * kT;
+    f[k] = 2.0 + (t < 0.5 ? 0.0 : amplitude_n * std::exp(growth_per_s * (t - 0.5)) * std::sin(2 * kPi * frequency_hz * (t - 0.5)));
+  }
+  return f;
+}
+
+TEST(PassivityMetrics, AFortyHertzRingOfAFewTenthsOfANewtonOscillates) {
+  // The 11-tick mean passes 71 % of a 40 Hz sine: 0.3 N leaves 0.17 N peak to peak above 0.1 N.
+  const Oscillation o = detect_oscillation(held_with(40, 0.3, 0), kT, 8.5);
+  EXPECT_TRUE(o.oscillates);
+  EXPECT_NEAR(o.ringing_s, 1.45, 0.06);  // from 0.5 s to the last whole window before the end
+  EXPECT_NEAR(o.ringing_ptp_n, 2 * 0.3 * (1 - std::sin(11 * 2 * kPi * 40 * kT / 2) / (11 * std::sin(2 * kPi * 40 * kT / 2))), 0.02);
+}
+
+TEST(PassivityMetrics, PhysiologicalTremorIsNotOscillation) {
+  // A 12 Hz tremor of 1 N: the 11-tick mean keeps 97 % of it; what is left swings 0.06 N (only
+  // the window where it starts, a kink, may swing a little more).
+  for (double f : {6.0, 8.0, 10.0, 12.0}) {
+    const Oscillation o = detect_oscillation(held_with(f, 1.0, 0), kT, 8.5);
+    EXPECT_FALSE(o.oscillates) << f << " Hz";
+    EXPECT_LE(o.ringing_s, 0.05 + 1e-9) << f << " Hz";
+  }
+}
+
+TEST(PassivityMetrics, ARingThatDiesOutIsNotOscillationAndOneThatGrowsIs) {
+  // 2 N at 60 Hz, halving every 35 ms: loud, but gone well within 0.3 s.
+  EXPECT_FALSE(detect_oscillation(held_with(60, 2.0, -std::log(2.0) / 0.035), kT, 8.5).oscillates);
+  // 0.05 N growing by e every 0.2 s: small at first, the loop's own ring.
+  const Oscillation grows = detect_oscillation(held_with(60, 0.05, 5), kT, 1000);
+  EXPECT_TRUE(grows.oscillates);
+  EXPECT_EQ(grows.chatter_ticks, 0);
+}
+
+TEST(PassivityMetrics, AForceJumpingBetweenNothingAndTheClampChatters) {
+  std::vector<double> f(1000, 0.0);
+  for (std::size_t k = 300; k < 320; ++k) f[k] = (k / 2) % 2 ? 8.5 : 0.0;  // two ticks each, 20 ticks long
+  const Oscillation o = detect_oscillation(f, kT, 8.5);
+  EXPECT_GE(o.chatter_ticks, 10);
+  EXPECT_TRUE(o.oscillates);
+  // A single contact that rises to the clamp over 20 ticks is not chatter.
+  std::vector<double> rise(1000, 0.0);
+  for (std::size_t k = 300; k < 1000; ++k) rise[k] = std::min(8.5, 8.5 * (k - 300) / 20.0);
+  EXPECT_EQ(detect_oscillation(rise, kT, 8.5).chatter_ticks, 0);
+}
+
+TEST(PassivityMetrics, FeltStiffnessOfALinearSpringIsItsConstant) {
+  const double k = 1234.5;
+  const Eigen::Vector3d press = Eigen::Vector3d(0.3, -0.2, -0.9).normalized();
+  const Eigen::Vector3d start(0.01, 0.02, 0.05);
+  std::vector<Eigen::Vector3d> forces, positions;
+  // Approach (no force), press in 8 mm over 500 ticks, hold, come back out.
+  for (int i = 0; i < 1500; ++i) {
+    const double depth = i < 200 ? 0.0 : i < 700 ? 8e-3 * (i - 200) / 500.0 : i < 1000 ? 8e-3 : 8e-3 * (1500 - i) / 500.0;
+    const Eigen::Vector3d sideways = 1e-3 * std::sin(0.01 * i) * press.unitOrthogonal();  // no force across the press
+    const Eigen::Vector3d approach = i < 200 ? Eigen::Vector3d((200 - i) * 1e-5 * press) : Eigen::Vector3d::Zero();
+    positions.push_back(start + depth * press + sideways - approach);
+    forces.push_back(i < 201 ? Eigen::Vector3d::Zero() : Eigen::Vector3d(-k * depth * press));
+  }
+  EXPECT_NEAR(felt_stiffness(forces, positions), k, 1e-6 * k);
+  EXPECT_TRUE(std::isnan(felt_stiffness(std::vector<Eigen::Vector3d>(10, Eigen::Vector3d::Zero()), positions)));
+}
+
+}  // namespace
+}  // namespace fetouch::app
