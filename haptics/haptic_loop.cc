@@ -173,7 +173,7 @@ const std::vector<ContactOutput>& HapticLoop::tick(const std::vector<Eigen::Vect
     // The tissue is pressed with the force the hand is sent (action and reaction at the device),
     // not the one the local model asked for. An integrator whose force was cut (scaled or clamped)
     // holds until it passes again: behind the cut it would only wind up.
-    const double passed_normal = out.force.dot(normal);
+    const double sent_normal = out.force.dot(normal);
     local_model_.set_integrating(c, !(out.force.norm() < kUncutShare * requested.norm()));
     out.port_energy_j = port.energy_j();
     out.passivity_scale = port.scale();
@@ -183,8 +183,8 @@ const std::vector<ContactOutput>& HapticLoop::tick(const std::vector<Eigen::Vect
     if (decimated_) {
       ContactSample& sample = samples_[c];
       sample.position = devices[c];
-      sample.force = -passed_normal * normal;
-      sample.normal_force = passed_normal;
+      sample.force = -sent_normal * normal;
+      sample.normal_force = sent_normal;
       sample.in_contact = out.in_contact;
     }
   }

@@ -11,6 +11,7 @@
 #include <iostream>
 #include <limits>
 #include <map>
+#include <optional>
 #include <sstream>
 #include <tuple>
 
@@ -93,7 +94,9 @@ config::Scene with_hand(const config::Scene& base, const Hand& hand, const std::
   return scene;
 }
 
-Run run_one(const config::Scene& scene, const Hand& hand, const std::string& event, const std::string& mode, long max_ticks) {
+// `first_forces`: when given, device 0's force per tick.
+Run run_one(const config::Scene& scene, const Hand& hand, const std::string& event, const std::string& mode, long max_ticks,
+            std::vector<Eigen::Vector3d>* first_forces = nullptr) {
   Run r;
   r.mode = mode, r.event = event, r.hand = hand;
   try {
@@ -106,17 +109,16 @@ Run run_one(const config::Scene& scene, const Hand& hand, const std::string& eve
     session.max_ticks = max_ticks;
     const SessionSummary s = run_lockstep(*rig.environment, rig.devices, session);
     r.ticks = s.ticks, r.max_force_n = s.max_force_n, r.newton_failures = s.newton_failures;
+    // Every device judged; the run keeps the worst (an oscillating one first, then the longest ring).
     for (std::size_t d = 0; d < s.forces.size(); ++d) {
       std::vector<double> size;
       for (const Eigen::Vector3d& f : s.forces[d]) size.push_back(f.norm());
       const Oscillation o = detect_oscillation(size, loop.period_s, loop.safety.max_force_n);
-      if (d == 0 || o.ringing_s > r.oscillation.ringing_s || o.chatter_ticks > r.oscillation.chatter_ticks) {
-        const bool was = r.oscillation.oscillates;
+      if (d == 0 || std::make_pair(o.oscillates, o.ringing_s) > std::make_pair(r.oscillation.oscillates, r.oscillation.ringing_s))
         r.oscillation = o;
-        r.oscillation.oscillates = was || o.oscillates;
-      }
       if (d == 0) r.felt_n_per_m = felt_stiffness(s.forces[0], s.positions[0]), r.force = std::move(size);
     }
+    if (first_forces && !s.forces.empty()) *first_forces = s.forces[0];
     for (const PassivitySummary& p : s.passivity) {
       r.controller_ticks += p.controller_ticks, r.adjusting_ticks += p.adjusting_ticks, r.generation_events += p.generation_events;
       r.max_controller_force_n = std::max(r.max_controller_force_n, p.max_controller_force_n);
@@ -182,7 +184,8 @@ int run_study_passivity(const PassivityOptions& o) {
   // from its first touch to its last) and their direction (into the tissue, against the force there).
   std::vector<Run> runs;
   const config::Vec3 down{0, 0, -1};
-  Run reference = run_one(with_hand(base, nominal, "none", 0, down, "off"), nominal, "none", "off", max_ticks);
+  std::vector<Eigen::Vector3d> reference_forces;
+  Run reference = run_one(with_hand(base, nominal, "none", 0, down, "off"), nominal, "none", "off", max_ticks, &reference_forces);
   progress.update(++done);
   if (!reference.error.empty()) throw std::runtime_error("the nominal run (the default hand, layer off) failed: " + reference.error);
   long first = -1, last = -1;
@@ -195,15 +198,8 @@ int run_study_passivity(const PassivityOptions& o) {
   const double period = 1.0 / base.haptics.rate_hz;
   const double event_at = 0.5 * (first + last) * period;
   config::Vec3 press = down;
-  {
-    const haptics::HapticLoopSettings loop = loop_settings(base);
-    SceneRig rig = build_scene_rig(with_hand(base, nominal, "none", 0, down, "off"), loop);
-    SessionSettings session;
-    session.loop = loop, session.probes = rig.probes, session.keep_forces = true, session.max_ticks = (first + last) / 2 + 1;
-    const SessionSummary s = run_lockstep(*rig.environment, rig.devices, session);
-    const Eigen::Vector3d f = s.forces[0].back();
-    if (f.norm() > 0) press = {-f.x() / f.norm(), -f.y() / f.norm(), -f.z() / f.norm()};
-  }
+  const Eigen::Vector3d middle = reference_forces[static_cast<std::size_t>((first + last) / 2)];
+  if (middle.norm() > 0) press = {-middle.x() / middle.norm(), -middle.y() / middle.norm(), -middle.z() / middle.norm()};
   log::info() << "study passivity: events at " << event_at << " s, along (" << press[0] << ", " << press[1] << ", " << press[2] << ")";
 
   for (const std::string& mode : o.modes) {
