@@ -27,10 +27,9 @@ Eigen::Vector3d ForceSafety::filter(const Eigen::Vector3d& requested,
     target *= gain;
   }
 
-  const double magnitude = target.norm();
-  if (magnitude > limits_.max_force_n) {
+  if (target.norm() > limits_.max_force_n) {
     ++clamped_;
-    target *= limits_.max_force_n / magnitude;
+    target = clamp_magnitude(target, limits_.max_force_n);
   }
 
   const Eigen::Vector3d step = target - last_;

@@ -20,6 +20,12 @@
 
 namespace fetouch::haptics {
 
+// f shortened to at most `limit` along its own direction (the clamp of the safety layer).
+inline Eigen::Vector3d clamp_magnitude(const Eigen::Vector3d& f, double limit) noexcept {
+  const double size = f.norm();
+  return size > limit ? Eigen::Vector3d(f * (limit / size)) : f;
+}
+
 struct ForceSafetyLimits {
   double max_force_n = 3.3;
   double max_force_rate_n_per_s = 1000;

@@ -167,13 +167,10 @@ const std::vector<ContactOutput>& HapticLoop::tick(const std::vector<Eigen::Vect
     out.in_contact = force(c) > 0;
     PassivityPort& port = passivity_[c];
     const Eigen::Vector3d requested = force(c) * normal;
-    const Eigen::Vector3d passed = port.filter(devices[c], velocities[c], requested);
-    out.force = safety_[c].filter(passed, age_s);
+    out.force = safety_[c].filter(port.filter(devices[c], velocities[c], requested), age_s);
     port.sent(out.force);
-    // The tissue is pressed with the force the hand is sent (action and reaction at the device),
-    // not the one the local model asked for. An integrator whose force was cut (scaled or clamped)
-    // holds until it passes again: behind the cut it would only wind up.
-    const double sent_normal = out.force.dot(normal);
+    // An integrator whose force was cut (scaled or clamped) holds until it passes again: behind the
+    // cut it would only wind up.
     local_model_.set_integrating(c, !(out.force.norm() < kUncutShare * requested.norm()));
     out.port_energy_j = port.energy_j();
     out.passivity_scale = port.scale();
@@ -181,6 +178,9 @@ const std::vector<ContactOutput>& HapticLoop::tick(const std::vector<Eigen::Vect
     // penetration along the normal; out of contact it is the device point.
     out.proxy = out.in_contact ? Eigen::Vector3d(devices[c] + predicted(c) * normal) : devices[c];
     if (decimated_) {
+      // The tissue is pressed with the force the hand is sent (action and reaction at the device),
+      // not the one the local model asked for.
+      const double sent_normal = out.force.dot(normal);
       ContactSample& sample = samples_[c];
       sample.position = devices[c];
       sample.force = -sent_normal * normal;

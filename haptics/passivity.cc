@@ -4,6 +4,8 @@
 #include <cmath>
 #include <stdexcept>
 
+#include "haptics/force_safety.h"
+
 namespace fetouch::haptics {
 
 namespace {
@@ -86,11 +88,7 @@ Eigen::Vector3d PassivityPort::filter(const Eigen::Vector3d& position, const Eig
     adjusting_ticks_ += damping.squaredNorm() > 0;
     force = requested - damping;
   }
-  const auto reachable = [this](const Eigen::Vector3d& f) {
-    const double size = f.norm();
-    return size > settings_.max_force_n ? Eigen::Vector3d(f * (settings_.max_force_n / size)) : f;
-  };
-  control_ = reachable(requested) - reachable(force);
+  control_ = clamp_magnitude(requested, settings_.max_force_n) - clamp_magnitude(force, settings_.max_force_n);
   if (control_.squaredNorm() > 0 || before.squaredNorm() > 0) {
     controller_ticks_ += control_ != before;
     max_control_ = std::max(max_control_, control_.norm());
