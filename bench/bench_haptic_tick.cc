@@ -1,6 +1,7 @@
 // One haptic tick (architecture budget: under 5 us for 4 contacts, compute only): device points in,
 // forces out, through hold, contact geometry, local model, the passivity layer (argument
-// `passivity`: 0 off, 1 observe, 2 on) and the safety layer. Driven by the
+// `passivity`: 0 off, 1 observe, 2 on), the on-line identification (argument `identification`: 0
+// off, 1 on; the devices move, so it learns at every tick) and the safety layer. Driven by the
 // lockstep session with fixed gains, so every 50th tick also carries the linear environment's
 // solve (amortised, a few ns); gain selection is the producer's work and is measured by
 // BM_SelectGains4Contacts.
@@ -21,6 +22,7 @@ void BM_HapticTick(benchmark::State& state) {
   const int contacts = static_cast<int>(state.range(2));
   HapticLoopSettings settings;
   settings.passivity.mode = static_cast<PassivityMode>(state.range(3));
+  settings.identification.enabled = state.range(4) != 0;
   settings.local_model = kind;
   settings.hold = hold;
   settings.schedule_gains = false;
@@ -45,8 +47,8 @@ void BM_HapticTick(benchmark::State& state) {
   }
 }
 BENCHMARK(BM_HapticTick)
-    ->ArgNames({"model", "hold", "contacts", "passivity"})
-    ->ArgsProduct({{0, 1, 2, 3}, {0, 1}, {1, 4}, {0, 1, 2}})
+    ->ArgNames({"model", "hold", "contacts", "passivity", "identification"})
+    ->ArgsProduct({{0, 1, 2, 3}, {0, 1}, {1, 4}, {0, 1, 2}, {0, 1}})
     ->Unit(benchmark::kNanosecond);
 
 }  // namespace

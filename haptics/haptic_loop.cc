@@ -3,6 +3,7 @@
 #include <Eigen/Cholesky>
 
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <stdexcept>
 #include <string>
@@ -52,6 +53,8 @@ HapticLoop::HapticLoop(const HapticLoopSettings& settings, const EnvironmentUpda
   passivity.period_s = settings.period_s;
   passivity.max_force_n = settings.safety.max_force_n;
   passivity_.assign(contacts_, PassivityPort(passivity));
+  identifiers_.assign(contacts_, ContactIdentifier(settings.identification));
+  checks_.assign(contacts_, IdentificationCheck{});
   last_points_.assign(contacts_, Eigen::Vector3d::Zero());
   velocities_.assign(contacts_, Eigen::Vector3d::Zero());
 }
@@ -67,6 +70,7 @@ void HapticLoop::prepare(FrameSlot& slot) const {
   problem.hold = slot.hold;
   problem.ratio = settings_.ratio;
   problem.stiffness = Eigen::LDLT<Eigen::MatrixXd>(slot.normal_compliance).solve(Eigen::MatrixXd::Identity(m, m));
+  slot.normal_stiffness = problem.stiffness.diagonal();
   if (slot.update.damping.size()) {
     problem.damping = normals.transpose() * slot.update.damping * normals;
     if (!settings_.coupling) problem.damping = Eigen::MatrixXd(problem.damping.diagonal().asDiagonal());
@@ -174,6 +178,24 @@ const std::vector<ContactOutput>& HapticLoop::tick(const std::vector<Eigen::Vect
     local_model_.set_integrating(c, !(out.force.norm() < kUncutShare * requested.norm()));
     out.port_energy_j = port.energy_j();
     out.passivity_scale = port.scale();
+    ContactIdentifier& identifier = identifiers_[c];
+    identifier.update(devices[c], velocities[c], normal, out.force, out.in_contact);
+    out.identified = identifier.valid() && out.in_contact;
+    out.identified_stiffness_n_per_m = identifier.stiffness_n_per_m();
+    out.identified_damping_n_s_per_m = identifier.damping_n_s_per_m();
+    out.condensed_stiffness_n_per_m = newest.normal_stiffness(c);
+    if (decimated_ && out.identified && out.condensed_stiffness_n_per_m > 0) {
+      IdentificationCheck& check = checks_[c];
+      const double difference =
+          std::abs(out.identified_stiffness_n_per_m - out.condensed_stiffness_n_per_m) / out.condensed_stiffness_n_per_m;
+      ++check.frames_compared;
+      check.last_relative_difference = difference;
+      check.max_relative_difference = std::max(check.max_relative_difference, difference);
+      if (difference > settings_.identification_bound) {
+        if (check.disagreements == 0) check.first_disagreement_frame = tick_count_ / n;
+        ++check.disagreements;
+      }
+    }
     // In contact the proxy sits on the (predicted) surface: the device moved out by the predicted
     // penetration along the normal; out of contact it is the device point.
     out.proxy = out.in_contact ? Eigen::Vector3d(devices[c] + predicted(c) * normal) : devices[c];

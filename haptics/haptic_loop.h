@@ -36,6 +36,7 @@
 #include "haptics/force_safety.h"
 #include "haptics/gain_selection.h"
 #include "haptics/hold.h"
+#include "haptics/identification.h"
 #include "haptics/local_model.h"
 #include "haptics/lock_free.h"
 #include "haptics/mode_channel.h"
@@ -60,6 +61,11 @@ struct HapticLoopSettings {
   ForceSafetyLimits safety;
   // The passivity layer per contact; its period is the loop's (period_s), whatever it says.
   PassivitySettings passivity;
+  // On-line identification per contact (identification.h), compared at every frame's first tick
+  // with the stiffness the newest frame condensed: a relative difference over
+  // identification_bound is a disagreement (counted per contact).
+  IdentificationSettings identification;
+  double identification_bound = 0.25;
   // Switches of local model and hold asked while running (mode_channel.h); none: the mode stays.
   ModeChannel* modes = nullptr;
 };
@@ -69,6 +75,7 @@ struct FrameSlot {
   EnvironmentUpdate update;
   Eigen::MatrixXd normal_compliance;  // W_n = N' W N, m x m
   Eigen::VectorXd normal_force;       // F_c of the samples that produced it (the Smith reference)
+  Eigen::VectorXd normal_stiffness;   // (W_n^-1)_cc: what contact c feels with the others held still
   LocalModelGains gains;              // the gains for this stiffness
   GainSelection selection;            // how they were chosen (scheduling on)
   LocalModelKind local_model = LocalModelKind::pi;  // the mode the gains are for: the tick takes
@@ -83,6 +90,20 @@ struct ContactOutput {
   bool in_contact = false;
   double port_energy_j = 0;      // E: energy from the hand into the rendering so far (passivity.h)
   double passivity_scale = 1;    // s: the share of the local model's force the layer let through
+  // On-line identification (identification.h): K and B of the force sent against the device's
+  // depth, valid once the contact has moved enough; and the newest frame's (W_n^-1)_cc.
+  double identified_stiffness_n_per_m = 0, identified_damping_n_s_per_m = 0;
+  bool identified = false;
+  double condensed_stiffness_n_per_m = 0;
+};
+
+// How the identified stiffness of one contact compared with the condensed one, frame by frame.
+struct IdentificationCheck {
+  long frames_compared = 0;     // frame starts in contact with a valid identification
+  long disagreements = 0;       // of those, relative difference over the bound
+  long first_disagreement_frame = -1;
+  double max_relative_difference = 0;
+  double last_relative_difference = 0;
 };
 
 class HapticLoop {
@@ -129,6 +150,8 @@ class HapticLoop {
   const FrameSlot& newest() const { return slots_[newest_]; }
   const ForceSafety& safety(int contact) const { return safety_[contact]; }
   const PassivityPort& passivity(int contact) const { return passivity_[contact]; }
+  const ContactIdentifier& identifier(int contact) const { return identifiers_[contact]; }
+  const IdentificationCheck& identification(int contact) const { return checks_[contact]; }
   // Frame starts at which no new answer was there (real time: the solve outlasted its frame), and
   // the tick of the first (-1: none). Never in lockstep.
   long late_answers() const { return late_answers_; }
@@ -164,6 +187,8 @@ class HapticLoop {
   std::vector<ContactOutput> outputs_;
   std::vector<ForceSafety> safety_;
   std::vector<PassivityPort> passivity_;
+  std::vector<ContactIdentifier> identifiers_;
+  std::vector<IdentificationCheck> checks_;
   std::vector<Eigen::Vector3d> last_points_, velocities_;  // for tick(points) alone
 };
 
