@@ -101,7 +101,7 @@ struct RecordingWriter::Impl {
   hid_t file = -1;
   struct DeviceSeries {
     std::unique_ptr<Series> time, position, velocity, force, proxy, penetration, normal_force, in_contact;
-    std::unique_ptr<Series> port_energy, passivity_scale;
+    std::unique_ptr<Series> port_energy, passivity_scale, identified_stiffness, identified_damping, condensed_stiffness;
   };
   std::vector<DeviceSeries> devices;
   std::unique_ptr<Series> frame, time, solve, residual, margin, iterations, converged, eigenvalues, gains, mode;
@@ -154,6 +154,9 @@ RecordingWriter::RecordingWriter(const std::filesystem::path& path, const Record
     d.in_contact = std::make_unique<Series>(g, "in_contact", H5T_NATIVE_UINT8, 1, r.name);
     d.port_energy = std::make_unique<Series>(g, "port_energy_j", H5T_NATIVE_DOUBLE, 1, r.name);
     d.passivity_scale = std::make_unique<Series>(g, "passivity_scale", H5T_NATIVE_DOUBLE, 1, r.name);
+    d.identified_stiffness = std::make_unique<Series>(g, "identified_stiffness_n_per_m", H5T_NATIVE_DOUBLE, 1, r.name);
+    d.identified_damping = std::make_unique<Series>(g, "identified_damping_n_s_per_m", H5T_NATIVE_DOUBLE, 1, r.name);
+    d.condensed_stiffness = std::make_unique<Series>(g, "condensed_stiffness_n_per_m", H5T_NATIVE_DOUBLE, 1, r.name);
     r.devices.push_back(std::move(d));
     H5Gclose(g);
   }
@@ -187,12 +190,14 @@ RecordingWriter::~RecordingWriter() {
 void RecordingWriter::append(int device, const DeviceSample* samples, std::size_t count) {
   Impl::DeviceSeries& d = impl_->devices.at(static_cast<std::size_t>(device));
   std::vector<double> time(count), position(3 * count), velocity(3 * count), force(3 * count), proxy(3 * count),
-      penetration(count), normal(count), energy(count), scale(count);
+      penetration(count), normal(count), energy(count), scale(count), identified(count), damping(count), condensed(count);
   std::vector<std::uint8_t> contact(count);
   for (std::size_t i = 0; i < count; ++i) {
     const DeviceSample& s = samples[i];
     time[i] = s.time_s, penetration[i] = s.penetration, normal[i] = s.normal_force, contact[i] = s.in_contact;
     energy[i] = s.port_energy_j, scale[i] = s.passivity_scale;
+    identified[i] = s.identified_stiffness_n_per_m, damping[i] = s.identified_damping_n_s_per_m;
+    condensed[i] = s.condensed_stiffness_n_per_m;
     for (int k = 0; k < 3; ++k) {
       position[3 * i + k] = s.position[k], velocity[3 * i + k] = s.velocity[k];
       force[3 * i + k] = s.force[k], proxy[3 * i + k] = s.proxy[k];
@@ -208,6 +213,9 @@ void RecordingWriter::append(int device, const DeviceSample* samples, std::size_
   d.in_contact->append(contact.data(), count);
   d.port_energy->append(energy.data(), count);
   d.passivity_scale->append(scale.data(), count);
+  d.identified_stiffness->append(identified.data(), count);
+  d.identified_damping->append(damping.data(), count);
+  d.condensed_stiffness->append(condensed.data(), count);
 }
 
 void RecordingWriter::append(const FrameRecord& f) {
@@ -393,12 +401,19 @@ Recording read_recording(const std::filesystem::path& path) {
                                  H5Lexists(g, "passivity_scale", H5P_DEFAULT) > 0;  // since 2026-11-26
       const auto energy = has_passivity ? read_all(g, "port_energy_j", 1, name) : std::vector<double>{};
       const auto scale = has_passivity ? read_all(g, "passivity_scale", 1, name) : std::vector<double>{};
+      const bool has_identification = H5Lexists(g, "identified_stiffness_n_per_m", H5P_DEFAULT) > 0 &&
+                                      H5Lexists(g, "identified_damping_n_s_per_m", H5P_DEFAULT) > 0 &&
+                                      H5Lexists(g, "condensed_stiffness_n_per_m", H5P_DEFAULT) > 0;  // since 2026-11-26
+      const auto identified = has_identification ? read_all(g, "identified_stiffness_n_per_m", 1, name) : std::vector<double>{};
+      const auto damping = has_identification ? read_all(g, "identified_damping_n_s_per_m", 1, name) : std::vector<double>{};
+      const auto condensed = has_identification ? read_all(g, "condensed_stiffness_n_per_m", 1, name) : std::vector<double>{};
       H5Gclose(g);
       // Datasets are extended one after the other: a session killed between two keeps the rows
       // every dataset has.
       std::size_t rows = std::min({time.size(), position.size() / 3, velocity.size() / 3, force.size() / 3,
                                    proxy.size() / 3, penetration.size(), normal.size(), contact.size()});
       if (has_passivity) rows = std::min({rows, energy.size(), scale.size()});
+      if (has_identification) rows = std::min({rows, identified.size(), damping.size(), condensed.size()});
       RecordedDevice d;
       d.name = probe;
       d.samples.resize(rows);
@@ -406,6 +421,9 @@ Recording read_recording(const std::filesystem::path& path) {
         DeviceSample& s = d.samples[r];
         s.time_s = time[r], s.penetration = penetration[r], s.normal_force = normal[r], s.in_contact = contact[r] != 0;
         if (has_passivity) s.port_energy_j = energy[r], s.passivity_scale = scale[r];
+        if (has_identification)
+          s.identified_stiffness_n_per_m = identified[r], s.identified_damping_n_s_per_m = damping[r],
+          s.condensed_stiffness_n_per_m = condensed[r];
         for (int k = 0; k < 3; ++k) {
           s.position[k] = position[3 * r + k], s.velocity[k] = velocity[3 * r + k];
           s.force[k] = force[3 * r + k], s.proxy[k] = proxy[3 * r + k];

@@ -33,6 +33,9 @@ haptics::HapticLoopSettings loop_settings(const config::Scene& scene) {
   s.passivity.max_step_n = p.max_step_n;
   s.passivity.recovery_per_s = p.recovery_per_s;
   s.passivity.period_s = s.period_s;
+  s.identification.enabled = h.identification.enabled;
+  s.identification.forgetting = h.identification.forgetting;
+  s.identification_bound = h.identification.bound;
   return s;
 }
 

@@ -87,6 +87,9 @@ class SessionBase {
     s.in_contact = out.in_contact;
     s.port_energy_j = out.port_energy_j;
     s.passivity_scale = out.passivity_scale;
+    s.identified_stiffness_n_per_m = out.identified ? out.identified_stiffness_n_per_m : 0.0;
+    s.identified_damping_n_s_per_m = out.identified ? out.identified_damping_n_s_per_m : 0.0;
+    s.condensed_stiffness_n_per_m = out.condensed_stiffness_n_per_m;
   }
 
   // Ticks to the summary and the recording: `count` ticks of device d.
@@ -198,6 +201,7 @@ SessionSummary run_lockstep(haptics::Environment& environment, std::vector<std::
   SessionSummary summary = base.finish();
   summary.first_failure = first_failure;
   summary.passivity = passivity_summary(loop);
+  summary.identification = identification_summary(loop);
   return summary;
 }
 
@@ -445,6 +449,7 @@ SessionSummary run_realtime(haptics::Environment& environment, std::vector<std::
   summary.stopped = stop_tick >= 0;
   for (const auto& d : devices) summary.recoverable_errors.push_back(d->recoverable_errors());
   summary.passivity = passivity_summary(loop);
+  summary.identification = identification_summary(loop);
   TimingSummary& t = summary.timing;
   starts.resize(static_cast<std::size_t>(ran));
   lateness.resize(static_cast<std::size_t>(ran));

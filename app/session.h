@@ -102,6 +102,16 @@ struct PassivitySummary {
   double min_scale = 1;            // the lowest share of the local model's force let through
 };
 
+// On-line identification for one device (haptics/identification.h): the identified stiffness the
+// hand felt against the stiffness the frames condensed, compared at every frame start.
+struct IdentificationSummary {
+  long frames_compared = 0;        // frame starts in contact with a valid identification
+  long disagreements = 0;          // of those, a relative difference over the bound
+  double first_disagreement_s = -1;  // when the first was (-1: none)
+  double max_relative_difference = 0;
+  double last_relative_difference = 0;
+};
+
 struct SessionSummary {
   long ticks = 0, frames = 0;
   double solve_p50_s = 0, solve_p99_s = 0, solve_max_s = 0;  // the environment's solve times
@@ -118,6 +128,7 @@ struct SessionSummary {
   int fault_device = -1;                 // which device had it
   std::vector<long> recoverable_errors;  // per device: recoverable errors (force errors) seen
   std::vector<PassivitySummary> passivity;  // per device
+  std::vector<IdentificationSummary> identification;  // per device
 };
 
 // Runs until the devices finish (or max_ticks). Allocation happens only outside the tick.

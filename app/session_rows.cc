@@ -48,4 +48,20 @@ std::vector<PassivitySummary> passivity_summary(const haptics::HapticLoop& loop)
   return out;
 }
 
+std::vector<IdentificationSummary> identification_summary(const haptics::HapticLoop& loop) {
+  std::vector<IdentificationSummary> out;
+  const double frame_s = loop.settings().ratio * loop.settings().period_s;
+  for (int c = 0; c < loop.contacts(); ++c) {
+    const haptics::IdentificationCheck& check = loop.identification(c);
+    IdentificationSummary s;
+    s.frames_compared = check.frames_compared;
+    s.disagreements = check.disagreements;
+    s.first_disagreement_s = check.first_disagreement_frame < 0 ? -1.0 : check.first_disagreement_frame * frame_s;
+    s.max_relative_difference = check.max_relative_difference;
+    s.last_relative_difference = check.last_relative_difference;
+    out.push_back(s);
+  }
+  return out;
+}
+
 }  // namespace fetouch::app

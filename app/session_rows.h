@@ -15,5 +15,7 @@ FrameRecord frame_record(const haptics::FrameSlot& slot, double time_s);
 
 // The passivity layer's counters per contact at the end of a session.
 std::vector<PassivitySummary> passivity_summary(const haptics::HapticLoop& loop);
+// The identification's comparison with the condensed stiffness, per device.
+std::vector<IdentificationSummary> identification_summary(const haptics::HapticLoop& loop);
 
 }  // namespace fetouch::app

@@ -215,6 +215,14 @@ struct Passivity {
   double recovery_per_s = 0.5;   // how fast a scaled stiffness comes back between contacts
 };
 
+// On-line identification (haptics/identification.h): the stiffness the hand feels, identified
+// from the device's signals and compared at every frame with the condensed stiffness.
+struct Identification {
+  bool enabled = true;
+  double forgetting = 0.99;  // RLS forgetting factor per tick (memory 1 / (1 - f) ticks)
+  double bound = 0.25;       // a relative difference above this is reported as a disagreement
+};
+
 struct Haptics {
   double rate_hz = 1000;
   LocalModelType local_model = LocalModelType::pi;
@@ -230,6 +238,7 @@ struct Haptics {
   // each contact renders with its own compliance only, and feels the others one frame late.
   bool coupling = true;
   Passivity passivity;
+  Identification identification;
 
   // Ticks per solver frame, N; valid once the scene has been validated.
   int ratio(const Solver& solver) const;

@@ -39,6 +39,14 @@ void read_passivity(MapView& haptics, Passivity& out) {
   map.number("max_step_n", out.max_step_n, {0, 100, true, false, "over 0, up to 100 N"});
   map.number("recovery_per_s", out.recovery_per_s, {0, 1000, true, false, "over 0, up to 1000 per s"});
 }
+void read_identification(MapView& haptics, Identification& out) {
+  const Entry e = haptics.entry("identification");
+  MapView map(haptics.reader(), e.value, e.path, e.key_mark, {"enabled", "forgetting", "bound"});
+  if (!map.valid()) return;
+  map.boolean("enabled", out.enabled);
+  map.number("forgetting", out.forgetting, {0.5, 1, true, false, "over 0.5, up to 1"});
+  map.number("bound", out.bound, {0, 10, true, false, "over 0, up to 10 (a share: 0.25 is 25 %)"});
+}
 const Choices<DeviceType> kDevices{{"replay", DeviceType::replay},
                                    {"operator", DeviceType::operator_model},
                                    {"phantom", DeviceType::phantom},
@@ -90,9 +98,10 @@ void read_haptics(MapView& scene, Haptics& out) {
   Reader& reader = scene.reader();
   MapView map(reader, e.value, e.path, e.key_mark,
               {"rate_hz", "local_model", "hold", "gains", "robustness_margin", "max_force_n",
-               "max_force_rate_n_per_s", "watchdog_timeout_s", "coupling", "passivity"});
+               "max_force_rate_n_per_s", "watchdog_timeout_s", "coupling", "passivity", "identification"});
   if (!map.valid()) return;
   if (map.has("passivity")) read_passivity(map, out.passivity);
+  if (map.has("identification")) read_identification(map, out.identification);
   map.boolean("coupling", out.coupling);
   map.number("rate_hz", out.rate_hz, plausible::haptic_rate_hz);
   map.choice("local_model", out.local_model, kLocalModels);

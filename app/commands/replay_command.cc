@@ -246,6 +246,22 @@ void write_summary(std::ostream& out, const ReplayOptions& o, const config::Scen
   }
   json.end_array();
   json.end_object();
+  // On-line identification per probe (haptics/identification.h, docs/stability.md).
+  json.key("identification").begin_object();
+  json.key("enabled").value(scene.haptics.identification.enabled);
+  json.key("bound").value(scene.haptics.identification.bound);
+  json.key("probes").begin_array();
+  for (const IdentificationSummary& i : s.identification) {
+    json.begin_object();
+    json.key("frames_compared").value(i.frames_compared);
+    json.key("disagreements").value(i.disagreements);
+    json.key("first_disagreement_s").value(i.first_disagreement_s);
+    json.key("max_relative_difference").value(i.max_relative_difference);
+    json.key("last_relative_difference").value(i.last_relative_difference);
+    json.end_object();
+  }
+  json.end_array();
+  json.end_object();
   json.key("session_wall_s").value(session_seconds);
   json.key("wall_s").value(seconds);
   if (comparison) {
@@ -431,6 +447,17 @@ int run_replay(const ReplayOptions& o) {
                   scene.probes[p].name.c_str(), ps.generation_events, ps.controller_ticks,
                   summary.ticks > 0 ? 100.0 * double(ps.controller_ticks) / double(summary.ticks) : 0.0, ps.adjusting_ticks,
                   ps.max_controller_force_n, 1e3 * ps.min_energy_j, ps.min_scale);
+    }
+    for (std::size_t p = 0; p < summary.identification.size() && p < scene.probes.size(); ++p) {
+      if (!scene.haptics.identification.enabled) break;
+      const IdentificationSummary& is = summary.identification[p];
+      std::printf("  identification %s: felt stiffness compared with the condensed one at %ld frames, %ld differ by over %.0f %%",
+                  scene.probes[p].name.c_str(), is.frames_compared, is.disagreements, 100 * scene.haptics.identification.bound);
+      if (is.disagreements > 0) std::printf(" (the first at %.2f s)", is.first_disagreement_s);
+      if (is.frames_compared > 0)
+        std::printf("; largest difference %.1f %%, at the last %.1f %%", 100 * is.max_relative_difference,
+                    100 * is.last_relative_difference);
+      std::printf("\n");
     }
     std::printf("  wrote %s, %s", recording.string().c_str(), (out / "summary.json").string().c_str());
     if (o.mesh_every > 0) std::printf(" and %s (open in ParaView)", (out / (scene.name + ".pvd")).string().c_str());
