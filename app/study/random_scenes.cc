@@ -175,6 +175,8 @@ RandomScene random_scene(unsigned int seed, int index) {
   if (probes == 2) y << "  coupling: " << draw.turn<std::string>("coupling", {"true", "false"}) << "\n";
   y << "  passivity: {mode: " << draw.turn<std::string>("passivity", {"on", "observe", "off"})
     << ", controller: " << draw.turn<std::string>("passivity_controller", {"scaling", "hannaford_ryu"}) << "}\n";
+  y << "  identification: {enabled: " << draw.turn<std::string>("identification", {"true", "false"})
+    << ", forgetting: " << number(draw.turn<double>("forgetting", {0.95, 0.99, 1.0})) << "}\n";
 
   // Probes: a poke, slide or squeeze on the top, fast or slow; replayed, or an operator's hand pulled along.
   y << "probes:\n";
