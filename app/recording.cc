@@ -105,12 +105,14 @@ struct RecordingWriter::Impl {
   };
   std::vector<DeviceSeries> devices;
   std::unique_ptr<Series> frame, time, solve, residual, margin, iterations, converged, eigenvalues, gains, mode;
+  std::unique_ptr<Series> energy_frame, hand_energy, tissue_work, held_energy, generated_energy;
   int contacts = 0;
 
   ~Impl() {
     devices.clear();
     frame.reset(), time.reset(), solve.reset(), residual.reset(), margin.reset(), iterations.reset();
     converged.reset(), eigenvalues.reset(), gains.reset(), mode.reset();
+    energy_frame.reset(), hand_energy.reset(), tissue_work.reset(), held_energy.reset(), generated_energy.reset();
     if (file >= 0) H5Fclose(file);
   }
 };
@@ -175,6 +177,12 @@ RecordingWriter::RecordingWriter(const std::filesystem::path& path, const Record
   write_attribute(r.gains->dataset, "columns", "proportional (Kh), integral (I per tick)");
   r.mode = std::make_unique<Series>(frames, "mode", H5T_NATIVE_UINT8, 2, r.name);
   write_attribute(r.mode->dataset, "columns", "local model (0 p, 1 pi, 2 smith, 3 pi_smith), hold (0 zoh, 1 foh)");
+  const hsize_t per_contact = static_cast<hsize_t>(std::max(1, r.contacts));
+  r.energy_frame = std::make_unique<Series>(frames, "energy_frame", H5T_NATIVE_INT64, 1, r.name);
+  r.hand_energy = std::make_unique<Series>(frames, "hand_energy_j", H5T_NATIVE_DOUBLE, per_contact, r.name);
+  r.tissue_work = std::make_unique<Series>(frames, "tissue_work_j", H5T_NATIVE_DOUBLE, per_contact, r.name);
+  r.held_energy = std::make_unique<Series>(frames, "held_energy_j", H5T_NATIVE_DOUBLE, per_contact, r.name);
+  r.generated_energy = std::make_unique<Series>(frames, "generated_energy_j", H5T_NATIVE_DOUBLE, per_contact, r.name);
   H5Gclose(frames);
   // From here on the file stays consistent on disk at every flush.
   check(H5Fstart_swmr_write(r.file), r.name + ": cannot start single-writer/multiple-reader mode");
@@ -237,6 +245,17 @@ void RecordingWriter::append(const FrameRecord& f) {
   r.gains->append(gains, 1);
   const std::uint8_t mode[2] = {static_cast<std::uint8_t>(std::max(0, f.local_model)), static_cast<std::uint8_t>(std::max(0, f.hold))};
   r.mode->append(mode, 1);
+  const std::int64_t energy_frame = f.energy_frame;
+  r.energy_frame->append(&energy_frame, 1);
+  const auto per_contact = [&](const std::vector<double>& values) {
+    std::vector<double> row(static_cast<std::size_t>(std::max(1, r.contacts)), 0.0);
+    for (std::size_t i = 0; i < row.size() && i < values.size(); ++i) row[i] = values[i];
+    return row;
+  };
+  r.hand_energy->append(per_contact(f.hand_energy_j).data(), 1);
+  r.tissue_work->append(per_contact(f.tissue_work_j).data(), 1);
+  r.held_energy->append(per_contact(f.held_energy_j).data(), 1);
+  r.generated_energy->append(per_contact(f.generated_energy_j).data(), 1);
 }
 
 void RecordingWriter::flush() {
@@ -447,6 +466,13 @@ Recording read_recording(const std::filesystem::path& path) {
       const auto gains = read_all(frames, "gains", 2, name);
       const bool has_mode = H5Lexists(frames, "mode", H5P_DEFAULT) > 0;  // since 2026-11-25
       const auto mode = has_mode ? read_all(frames, "mode", 2, name) : std::vector<double>{};
+      const bool has_audit = H5Lexists(frames, "energy_frame", H5P_DEFAULT) > 0;  // since 2026-11-26
+      const auto audit = [&](const char* dataset) {
+        return has_audit ? read_all(frames, dataset, contacts, name) : std::vector<double>{};
+      };
+      const auto energy_frame = has_audit ? read_all(frames, "energy_frame", 1, name) : std::vector<double>{};
+      const auto hand = audit("hand_energy_j"), tissue = audit("tissue_work_j"), coupling = audit("held_energy_j"),
+                 generated = audit("generated_energy_j");
       H5Gclose(frames);
       const std::size_t rows = std::min({frame.size(), time.size(), solve.size(), residual.size(), margin.size(),
                                          iterations.size(), converged.size(), std::size_t(eigenvalues.size() / contacts), gains.size() / 2});
@@ -463,6 +489,14 @@ Recording read_recording(const std::filesystem::path& path) {
             throw std::runtime_error(name + ": /frames/mode row " + std::to_string(r) + " holds (" + std::to_string(model) + ", " +
                                      std::to_string(hold) + "); local models are 0 to 3 and holds 0 or 1 (docs/replay.md)");
           f.local_model = static_cast<int>(model), f.hold = static_cast<int>(hold);
+        }
+        if (r < energy_frame.size() && (r + 1) * contacts <= std::min({hand.size(), tissue.size(), coupling.size(), generated.size()})) {
+          const auto row = [&](const std::vector<double>& v) {
+            return std::vector<double>(v.begin() + static_cast<long>(r * contacts), v.begin() + static_cast<long>((r + 1) * contacts));
+          };
+          f.energy_frame = static_cast<long>(energy_frame[r]);
+          f.hand_energy_j = row(hand), f.tissue_work_j = row(tissue), f.held_energy_j = row(coupling);
+          f.generated_energy_j = row(generated);
         }
         out.frames.push_back(f);
       }

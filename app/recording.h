@@ -17,7 +17,10 @@
 //       stiffness_eigenvalues_n_per_m [n x m] (of the condensed normal stiffness W_n^-1);
 //       gains [n x 2] (Kh, I per tick);
 //       mode [n x 2] (uint8: local model 0 p, 1 pi, 2 smith, 3 pi_smith; hold 0 zoh, 1 foh), which
-//       changes within a take when the trainer's switch is accepted (absent in older recordings)
+//       changes within a take when the trainer's switch is accepted (absent in older recordings);
+//       energy_frame [n] (int64) and hand_energy_j, tissue_work_j, held_energy_j,
+//       generated_energy_j [n x m]: the energy audit of frame energy_frame's ticks
+//       (haptics::FrameEnergy; absent in recordings before 2026-11-26's audit)
 // The file is written in HDF5's single-writer/multiple-reader mode (SWMR): every flush leaves it
 // consistent on disk, so a session killed at any moment loses only what came after the last flush
 // (the I/O thread flushes at least once a second), and the file can be read while it is written.
@@ -69,6 +72,11 @@ struct FrameRecord {
   // The mode those gains are for (haptics::LocalModelKind and HoldKind as integers, the codes of
   // /frames/mode); -1 where a recording read back has no mode column.
   int local_model = -1, hold = -1;
+  // The energy audit (haptics::FrameEnergy) of the ticks of frame `energy_frame`, per contact: the
+  // frame itself in lockstep, the one before it in real time (the answer's row is written before
+  // its own frame's ticks have run). -1 and empty where there is none.
+  long energy_frame = -1;
+  std::vector<double> hand_energy_j, tissue_work_j, held_energy_j, generated_energy_j;
 };
 
 class RecordingWriter {

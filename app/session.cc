@@ -187,7 +187,8 @@ SessionSummary run_lockstep(haptics::Environment& environment, std::vector<std::
     ++filled;
     // A frame just promoted (its first tick): record the update the tick now holds.
     if (k % settings.loop.ratio == 0 && k > 0) {
-      const FrameRecord f = frame_record(loop.newest(), k * period);
+      FrameRecord f = frame_record(loop.newest(), k * period);
+      add_energy_audit(f, k / settings.loop.ratio - 1, loop.frame_energy());
       base.take_frame(f);
       if (!f.converged && first_failure.empty())
         first_failure = "at " + std::to_string(f.time_s) + " s: " + loop.newest().update.status.message;
@@ -211,6 +212,7 @@ namespace {
 struct FrameRequest {
   long frame = -1;
   std::vector<haptics::ContactSample> samples;
+  std::vector<haptics::FrameEnergy> energy;  // the audit of the frame before `frame`
 };
 
 double seconds_between(const timespec& from, const timespec& to) {
@@ -237,7 +239,8 @@ SessionSummary run_realtime(haptics::Environment& environment, std::vector<std::
   const double period = settings.loop.period_s;
   const long period_ns = std::lround(period * 1e9);
 
-  haptics::TripleBuffer<FrameRequest> requests(FrameRequest{-1, std::vector<haptics::ContactSample>(m)});
+  haptics::TripleBuffer<FrameRequest> requests(
+      FrameRequest{-1, std::vector<haptics::ContactSample>(m), std::vector<haptics::FrameEnergy>(m)});
   // Four seconds of ticks: the I/O thread drains it every few milliseconds.
   haptics::SpscRing<DeviceSample> ring(static_cast<std::size_t>(m) * 4096);
   std::vector<double> starts(static_cast<std::size_t>(ticks)), lateness(static_cast<std::size_t>(ticks));
@@ -310,6 +313,7 @@ SessionSummary run_realtime(haptics::Environment& environment, std::vector<std::
       FrameRequest& r = requests.back();
       r.frame = loop.frame();
       std::copy(loop.samples().begin(), loop.samples().end(), r.samples.begin());
+      std::copy(loop.frame_energy().begin(), loop.frame_energy().end(), r.energy.begin());
       if (!requests.publish()) skipped.fetch_add(1, std::memory_order_relaxed);
     }
     ran = ++k;
@@ -391,7 +395,8 @@ SessionSummary run_realtime(haptics::Environment& environment, std::vector<std::
         timespec answered{};
         clock_gettime(CLOCK_MONOTONIC, &answered);
         const double arrived = seconds_between(origin, answered);
-        const FrameRecord f = frame_record(slot, arrived);
+        FrameRecord f = frame_record(slot, arrived);
+        if (r.frame > 0) add_energy_audit(f, r.frame - 1, r.energy);
         loop.publish();
         {
           std::lock_guard<std::mutex> lock(frames_mutex);

@@ -100,6 +100,10 @@ struct PassivitySummary {
   double max_controller_force_n = 0;
   double min_energy_j = 0;         // the lowest port energy: the most the loop handed the hand
   double min_scale = 1;            // the lowest share of the local model's force let through
+  // The frame-rate energy audit (haptics::FrameEnergy): frames that generated more than the
+  // tolerance (1 uJ), and the most one frame generated.
+  long generating_frames = 0;
+  double max_frame_generation_j = 0;
 };
 
 // On-line identification for one device (haptics/identification.h): the identified stiffness the

@@ -30,6 +30,17 @@ FrameRecord frame_record(const haptics::FrameSlot& slot, double time_s) {
   return f;
 }
 
+void add_energy_audit(FrameRecord& record, long frame, const std::vector<haptics::FrameEnergy>& energy) {
+  record.energy_frame = frame;
+  record.hand_energy_j.clear(), record.tissue_work_j.clear(), record.held_energy_j.clear(), record.generated_energy_j.clear();
+  for (const haptics::FrameEnergy& e : energy) {
+    record.hand_energy_j.push_back(e.hand_j);
+    record.tissue_work_j.push_back(e.tissue_j);
+    record.held_energy_j.push_back(e.held_j);
+    record.generated_energy_j.push_back(e.generated_j);
+  }
+}
+
 // The passivity layer's counters at the end of a session.
 std::vector<PassivitySummary> passivity_summary(const haptics::HapticLoop& loop) {
   std::vector<PassivitySummary> out;
@@ -43,6 +54,8 @@ std::vector<PassivitySummary> passivity_summary(const haptics::HapticLoop& loop)
     s.max_controller_force_n = p.max_controller_force_n();
     s.min_energy_j = p.min_energy_j();
     s.min_scale = p.min_scale();
+    s.generating_frames = loop.generating_frames(c);
+    s.max_frame_generation_j = loop.max_generated_j(c);
     out.push_back(s);
   }
   return out;

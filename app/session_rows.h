@@ -12,6 +12,8 @@ namespace fetouch::app {
 
 // The frame's row of the recording from the update the tick now holds, taken up at time_s.
 FrameRecord frame_record(const haptics::FrameSlot& slot, double time_s);
+// Adds the energy audit of frame `frame`'s ticks (HapticLoop::frame_energy()) to a row.
+void add_energy_audit(FrameRecord& record, long frame, const std::vector<haptics::FrameEnergy>& energy);
 
 // The passivity layer's counters per contact at the end of a session.
 std::vector<PassivitySummary> passivity_summary(const haptics::HapticLoop& loop);

@@ -55,6 +55,14 @@ HapticLoop::HapticLoop(const HapticLoopSettings& settings, const EnvironmentUpda
   passivity_.assign(contacts_, PassivityPort(passivity));
   identifiers_.assign(contacts_, ContactIdentifier(settings.identification));
   checks_.assign(contacts_, IdentificationCheck{});
+  frame_energy_.assign(contacts_, FrameEnergy{});
+  audit_open_.assign(contacts_, FrameEnergy{});
+  audit_force_.assign(contacts_, Eigen::Vector3d::Zero());
+  audit_point_.assign(contacts_, Eigen::Vector3d::Zero());
+  audit_in_contact_.assign(contacts_, 0);
+  audit_held_.assign(contacts_, 0.0);
+  generating_frames_.assign(contacts_, 0);
+  max_generated_.assign(contacts_, 0.0);
   last_points_.assign(contacts_, Eigen::Vector3d::Zero());
   velocities_.assign(contacts_, Eigen::Vector3d::Zero());
 }
@@ -96,6 +104,13 @@ void HapticLoop::promote() noexcept {
   newest_ = published;
   newest_arrival_ = tick_count_;
   const FrameSlot& slot = slots_[newest_];
+  // The tissue's surface moves to the answer now: the work the samples' forces did on it.
+  const FrameSlot& before = slots_[previous_];
+  for (int c = 0; c < contacts_; ++c) {
+    const Eigen::Vector3d& normal = slot.update.frames[c].normal;
+    const double moved = normal.dot(slot.update.frames[c].point - before.update.frames[c].point);
+    audit_open_[c].tissue_j += -0.5 * (slot.normal_force(c) + before.normal_force(c)) * moved;
+  }
   local_model_.set_compliance(slot.normal_compliance);
   hold_ = slot.hold;
   if (slot.local_model != local_model_.kind()) {  // a switch the producer accepted: its gains at once
@@ -124,6 +139,7 @@ const std::vector<ContactOutput>& HapticLoop::tick(const std::vector<Eigen::Vect
                                                    const std::vector<Eigen::Vector3d>& velocities) noexcept {
   const int n = settings_.ratio;
   const int i = static_cast<int>(tick_count_ % n);
+  if (tick_count_ > 0) audit_tick(devices, i == 0);
   if (i == 0 && tick_count_ > 0) {
     if (middle_.fresh()) {
       promote();
@@ -178,6 +194,9 @@ const std::vector<ContactOutput>& HapticLoop::tick(const std::vector<Eigen::Vect
     local_model_.set_integrating(c, !(out.force.norm() < kUncutShare * requested.norm()));
     out.port_energy_j = port.energy_j();
     out.passivity_scale = port.scale();
+    audit_force_[c] = out.force;
+    audit_point_[c] = devices[c];
+    audit_in_contact_[c] = out.in_contact;
     ContactIdentifier& identifier = identifiers_[c];
     identifier.update(devices[c], velocities[c], normal, out.force, out.in_contact);
     out.identified = identifier.valid() && out.in_contact;
@@ -212,6 +231,24 @@ const std::vector<ContactOutput>& HapticLoop::tick(const std::vector<Eigen::Vect
   }
   ++tick_count_;
   return outputs_;
+}
+
+void HapticLoop::audit_tick(const std::vector<Eigen::Vector3d>& devices, bool frame_ends) noexcept {
+  for (int c = 0; c < contacts_; ++c) {
+    FrameEnergy& open = audit_open_[c];
+    open.hand_j += -audit_force_[c].dot(devices[c] - audit_point_[c]);
+    if (!frame_ends) continue;
+    const double held_before = audit_held_[c];
+    open.held_j = audit_held_[c] = held_before + open.hand_j - open.tissue_j;
+    open.generated_j = std::max(0.0, std::max(0.0, -open.held_j) - std::max(0.0, -held_before));
+    if (open.generated_j > settings_.audit_tolerance_j) ++generating_frames_[c];
+    max_generated_[c] = std::max(max_generated_[c], open.generated_j);
+    frame_energy_[c] = open;
+    // Out of contact the coupling holds nothing: the next contact's books start afresh (what this
+    // one dissipated does not hide what a later one generates).
+    if (!audit_in_contact_[c]) audit_held_[c] = 0;
+    open = FrameEnergy{};
+  }
 }
 
 const std::vector<ContactOutput>& LockstepSession::tick(const std::vector<Eigen::Vector3d>& devices) {

@@ -66,6 +66,8 @@ struct HapticLoopSettings {
   // identification_bound is a disagreement (counted per contact).
   IdentificationSettings identification;
   double identification_bound = 0.25;
+  // The energy audit (FrameEnergy): a frame that generated more than this is counted.
+  double audit_tolerance_j = 1e-6;
   // Switches of local model and hold asked while running (mode_channel.h); none: the mode stays.
   ModeChannel* modes = nullptr;
 };
@@ -95,6 +97,29 @@ struct ContactOutput {
   double identified_stiffness_n_per_m = 0, identified_damping_n_s_per_m = 0;
   bool identified = false;
   double condensed_stiffness_n_per_m = 0;
+};
+
+// The frame-rate energy audit of one contact. The rendering between the hand and the tissue (the
+// local model, the holds, the frame delay) is a two-port: energy enters it from the hand at the
+// tick rate and leaves it into the tissue at the frame rate. Over the ticks of one frame, with f(k)
+// the force sent at tick k (held until the next), x the device point, n the held normal, F_j the
+// normal force of frame j's samples and p_j the surface point of the answer to them:
+//     hand      = sum over the frame's ticks of -f(k-1) . (x(k) - x(k-1))      (the port observer's E)
+//     tissue    = -(F_j-1 + F_j) / 2 n . (p_j - p_j-1), booked in the frame that takes p_j up
+//                 (the trapezoid: exactly the change of a linear tissue's elastic energy)
+//     held      = the sum of hand - tissue since the contact began: what the rendering holds or
+//                 has dissipated. A rendering that starts empty is passive iff held >= 0 at all
+//                 times (no storage function needed, as for the port observer); held < 0 is
+//                 energy the loop generated and handed to the hand or the tissue.
+//     generated = how much further below zero held went in this frame (0 if it did not)
+// A frame that generated more than HapticLoopSettings::audit_tolerance_j is counted. Out of contact
+// the rendering holds nothing, so held restarts at every contact (what one contact dissipated does
+// not hide what the next generates). The P local model is a spring between the hand and the
+// tissue and stays passive with a hand that does not ring it; PI and the Smith predictor drive the
+// tissue's force towards the frame's equilibrium whatever the hand has put in, and a press through
+// them typically hands the tissue more than the hand gave (docs/stability.md, section 11).
+struct FrameEnergy {
+  double hand_j = 0, tissue_j = 0, held_j = 0, generated_j = 0;
 };
 
 // How the identified stiffness of one contact compared with the condensed one, frame by frame.
@@ -152,6 +177,12 @@ class HapticLoop {
   const PassivityPort& passivity(int contact) const { return passivity_[contact]; }
   const ContactIdentifier& identifier(int contact) const { return identifiers_[contact]; }
   const IdentificationCheck& identification(int contact) const { return checks_[contact]; }
+  // The energy audit of the frame that ended at the last tick that started a frame (valid with
+  // samples(): right after a tick that decimated), one per contact; and per contact the frames that
+  // generated more than the tolerance, and the most one generated.
+  const std::vector<FrameEnergy>& frame_energy() const { return frame_energy_; }
+  long generating_frames(int contact) const { return generating_frames_[contact]; }
+  double max_generated_j(int contact) const { return max_generated_[contact]; }
   // Frame starts at which no new answer was there (real time: the solve outlasted its frame), and
   // the tick of the first (-1: none). Never in lockstep.
   long late_answers() const { return late_answers_; }
@@ -159,6 +190,9 @@ class HapticLoop {
 
  private:
   void promote() noexcept;
+  // The energy audit's share of a tick: the hand's work over the last tick; at a frame's end,
+  // the frame's balance (FrameEnergy).
+  void audit_tick(const std::vector<Eigen::Vector3d>& devices, bool frame_ends) noexcept;
   // A mode asked through settings_.modes, analysed on the pending slot's stiffness and answered.
   void consider_mode_switch(FrameSlot& slot);
 
@@ -189,6 +223,13 @@ class HapticLoop {
   std::vector<PassivityPort> passivity_;
   std::vector<ContactIdentifier> identifiers_;
   std::vector<IdentificationCheck> checks_;
+  // The energy audit: the open frame's sums, the last tick's force, point and coupling stiffness.
+  std::vector<FrameEnergy> frame_energy_, audit_open_;
+  std::vector<Eigen::Vector3d> audit_force_, audit_point_;
+  std::vector<char> audit_in_contact_;
+  std::vector<double> audit_held_;
+  std::vector<long> generating_frames_;
+  std::vector<double> max_generated_;
   std::vector<Eigen::Vector3d> last_points_, velocities_;  // for tick(points) alone
 };
 

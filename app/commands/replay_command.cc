@@ -242,6 +242,8 @@ void write_summary(std::ostream& out, const ReplayOptions& o, const config::Scen
     json.key("max_controller_force_n").value(p.max_controller_force_n);
     json.key("min_port_energy_j").value(p.min_energy_j);
     json.key("min_scale").value(p.min_scale);
+    json.key("generating_frames").value(p.generating_frames);
+    json.key("max_frame_generation_j").value(p.max_frame_generation_j);
     json.end_object();
   }
   json.end_array();
@@ -447,6 +449,8 @@ int run_replay(const ReplayOptions& o) {
                   scene.probes[p].name.c_str(), ps.generation_events, ps.controller_ticks,
                   summary.ticks > 0 ? 100.0 * double(ps.controller_ticks) / double(summary.ticks) : 0.0, ps.adjusting_ticks,
                   ps.max_controller_force_n, 1e3 * ps.min_energy_j, ps.min_scale);
+      std::printf("  energy audit %s: %ld of %ld frames generated energy (over 1 uJ), the most %.3g mJ in one frame\n",
+                  scene.probes[p].name.c_str(), ps.generating_frames, summary.frames, 1e3 * ps.max_frame_generation_j);
     }
     for (std::size_t p = 0; p < summary.identification.size() && p < scene.probes.size(); ++p) {
       if (!scene.haptics.identification.enabled) break;

@@ -40,6 +40,7 @@ fs::path scene_copy(const fs::path& dir, const std::string& name, const std::str
 struct Replayed {
   YAML::Node summary;
   std::vector<app::DeviceSample> samples;
+  std::vector<app::FrameRecord> frames;
 };
 
 Replayed replay(const fs::path& dir, const fs::path& scene) {
@@ -48,7 +49,9 @@ Replayed replay(const fs::path& dir, const fs::path& scene) {
   EXPECT_EQ(r.exit_code, 0) << r.err;
   Replayed run;
   run.summary = YAML::Load(r.out);
-  run.samples = app::read_recording(out / "recording.h5").devices.at(0).samples;
+  const app::Recording recording = app::read_recording(out / "recording.h5");
+  run.samples = recording.devices.at(0).samples;
+  run.frames = recording.frames;
   return run;
 }
 
@@ -92,6 +95,27 @@ TEST(PassivityReplay, StiffBlockUnderALightGripRingsWithoutTheLayerAndIsStillWit
   double lowest_scale = 1;
   for (const auto& s : shipped.samples) lowest_scale = std::min(lowest_scale, s.passivity_scale);
   EXPECT_NEAR(on["probes"][0]["min_scale"].as<double>(), lowest_scale, 1e-12);
+
+  // The frame-rate energy audit: the hand's energy over the audited frames is the port observer's
+  // at the tick that closed the last of them; the frames that generated (over 1 uJ) are the
+  // summary's; unprotected, most frames of the ringing hold generate, with the layer few do.
+  for (const Replayed* run : {&observed, &shipped}) {
+    double hand = 0;
+    long generating = 0, last = -1;
+    for (const app::FrameRecord& f : run->frames) {
+      ASSERT_EQ(f.hand_energy_j.size(), 1u);
+      hand += f.hand_energy_j[0];
+      generating += f.generated_energy_j[0] > 1e-6;
+      last = f.energy_frame;
+    }
+    ASSERT_GT(last, 0);
+    const double observer = run->samples.at(static_cast<std::size_t>(50 * (last + 1))).port_energy_j;
+    EXPECT_NEAR(hand, observer, 1e-9 + 1e-9 * std::abs(observer));
+    EXPECT_EQ(run->summary["passivity"]["probes"][0]["generating_frames"].as<long>(), generating);
+  }
+  const long unprotected = off["probes"][0]["generating_frames"].as<long>(), protected_ = on["probes"][0]["generating_frames"].as<long>();
+  EXPECT_GE(unprotected, 30);  // of 60
+  EXPECT_LE(5 * protected_, unprotected);
   fs::remove_all(dir);
 }
 

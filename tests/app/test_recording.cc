@@ -67,6 +67,9 @@ TEST(Recording, RoundTripKeepsEveryValue) {
       f.stiffness_eigenvalues = {100.0 + j, 300.0 - j};
       f.proportional_gain = 0.2, f.integral_gain = 1e-3 * j;
       f.local_model = j < 20 ? 3 : 0, f.hold = j < 20 ? 0 : 1;  // pi_smith + zoh, then p + foh
+      f.energy_frame = j - 1;
+      f.hand_energy_j = {1e-6 * j, -2e-6 * j}, f.tissue_work_j = {3e-7 * j, 0.0};
+      f.held_energy_j = {-1e-5 + 1e-7 * j, 4e-6}, f.generated_energy_j = {j % 5 == 0 ? 1e-6 : 0.0, 0.0};
       writer.append(f);
     }
     writer.commit();
@@ -105,6 +108,11 @@ TEST(Recording, RoundTripKeepsEveryValue) {
   EXPECT_EQ(r.frames[10].stiffness_eigenvalues, (std::vector<double>{110, 290}));
   EXPECT_EQ(r.frames[10].integral_gain, 1e-3 * 10);
   EXPECT_EQ(r.frames[19].local_model, 3);
+  EXPECT_EQ(r.frames[12].energy_frame, 11);
+  EXPECT_EQ(r.frames[12].hand_energy_j, (std::vector<double>{1e-6 * 12, -2e-6 * 12}));
+  EXPECT_EQ(r.frames[12].tissue_work_j, (std::vector<double>{3e-7 * 12, 0.0}));
+  EXPECT_EQ(r.frames[12].held_energy_j, (std::vector<double>{-1e-5 + 1e-7 * 12, 4e-6}));
+  EXPECT_EQ(r.frames[15].generated_energy_j, (std::vector<double>{1e-6, 0.0}));
   EXPECT_EQ(r.frames[19].hold, 0);
   EXPECT_EQ(r.frames[20].local_model, 0);
   EXPECT_EQ(r.frames[20].hold, 1);
