@@ -139,7 +139,7 @@ const std::vector<ContactOutput>& HapticLoop::tick(const std::vector<Eigen::Vect
                                                    const std::vector<Eigen::Vector3d>& velocities) noexcept {
   const int n = settings_.ratio;
   const int i = static_cast<int>(tick_count_ % n);
-  if (tick_count_ > 0) audit_tick(devices, i == 0);
+  audit_tick(devices, i == 0 && tick_count_ > 0);
   if (i == 0 && tick_count_ > 0) {
     if (middle_.fresh()) {
       promote();
@@ -195,7 +195,6 @@ const std::vector<ContactOutput>& HapticLoop::tick(const std::vector<Eigen::Vect
     out.port_energy_j = port.energy_j();
     out.passivity_scale = port.scale();
     audit_force_[c] = out.force;
-    audit_point_[c] = devices[c];
     audit_in_contact_[c] = out.in_contact;
     ContactIdentifier& identifier = identifiers_[c];
     identifier.update(devices[c], velocities[c], normal, out.force, out.in_contact);
@@ -236,7 +235,9 @@ const std::vector<ContactOutput>& HapticLoop::tick(const std::vector<Eigen::Vect
 void HapticLoop::audit_tick(const std::vector<Eigen::Vector3d>& devices, bool frame_ends) noexcept {
   for (int c = 0; c < contacts_; ++c) {
     FrameEnergy& open = audit_open_[c];
-    open.hand_j += -audit_force_[c].dot(devices[c] - audit_point_[c]);
+    const double work = -audit_force_[c].dot(devices[c] - audit_point_[c]);
+    if (std::isfinite(work)) open.hand_j += work;  // a device's glitch is the safety layer's, not the books'
+    audit_point_[c] = devices[c];
     if (!frame_ends) continue;
     const double held_before = audit_held_[c];
     open.held_j = audit_held_[c] = held_before + open.hand_j - open.tissue_j;
