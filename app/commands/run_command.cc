@@ -75,6 +75,7 @@ void write_run_summary(std::ostream& out, const config::Scene& scene, const Sess
   json.key("tick_lateness_max_s").value(t.lateness_max_s);
   json.key("late_ticks").value(t.tick_overruns);
   json.key("frame_overruns").value(t.frame_overruns);
+  json.key("first_late_tick").value(t.first_late_tick);
   json.key("skipped_frames").value(t.skipped_frames);
   json.end_object();
   out << "\n";

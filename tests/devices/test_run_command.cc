@@ -107,16 +107,23 @@ TEST_F(RunCommand, TheStandinReceivesExactlyTheRecordedForcesAndAgreesWithTheOpe
   const auto& lockstep = replayed.devices.at(0).samples;
   const std::size_t n = std::min(lockstep.size(), ticks.size());
   ASSERT_GT(n, 3000u);
-  double squared = 0, worst = 0;
+  // Up to the first frame whose answer came late (the summary's first_late_tick; -1: none) the
+  // real-time forces are lockstep's; after it they differ by what the late answers held back, which
+  // depends on how busy the machine is (a solve of this scene with a Newton step takes 50-100 ms
+  // here, over the 50 ms frame), so only their RMS is bounded.
+  const long first_late = j["first_late_tick"].as<long>();
+  double squared = 0, worst = 0, worst_on_time = 0;
   for (std::size_t k = 0; k < n; ++k) {
     const double e = (lockstep[k].force - ticks[k].force).norm();
     squared += e * e, worst = std::max(worst, e);
+    if (first_late < 0 || static_cast<long>(k) < first_late) worst_on_time = std::max(worst_on_time, e);
   }
   const double rms = std::sqrt(squared / double(n));
-  std::printf("run on the stand-in against lockstep replay with the operator: RMS %.4f N, worst %.4f N, peak %.3f N\n", rms,
-              worst, peak);
+  std::printf("run on the stand-in against lockstep replay with the operator: RMS %.4f N, worst %.4f N (%.2g N before the "
+              "first late answer, tick %ld), peak %.3f N\n",
+              rms, worst, worst_on_time, first_late, peak);
   EXPECT_LT(rms, 0.01 * peak);
-  EXPECT_LT(worst, 0.05 * peak);
+  EXPECT_LT(worst_on_time, 1e-9 * peak);
 }
 
 TEST_F(RunCommand, TwoUsersOnTwoDevicesByName) {
