@@ -303,7 +303,15 @@ SessionSummary run_realtime(haptics::Environment& environment, std::vector<std::
     if (monitor) {
       auto& probes = monitor->probes.back();
       for (int d = 0; d < m && d < SessionMonitor::kMaxDevices; ++d)
-        probes[d] = {points[d], out[d].proxy, block[d].force, out[d].penetration, out[d].in_contact};
+        probes[d] = {points[d],
+                     out[d].proxy,
+                     block[d].force,
+                     out[d].penetration,
+                     out[d].in_contact,
+                     out[d].port_energy_j,
+                     out[d].passivity_scale,
+                     out[d].identified ? out[d].identified_stiffness_n_per_m : 0.0,
+                     out[d].condensed_stiffness_n_per_m};
       monitor->probes.publish();
       monitor->ticks.store(k + 1, std::memory_order_relaxed);
       monitor->late_ticks.store(tick_overruns.load(std::memory_order_relaxed), std::memory_order_relaxed);

@@ -46,6 +46,10 @@ struct SessionMonitor {
     Eigen::Vector3d position = Eigen::Vector3d::Zero(), proxy = Eigen::Vector3d::Zero(), force = Eigen::Vector3d::Zero();
     double penetration = 0;
     bool in_contact = false;
+    // The passivity layer (port energy, J; the share s let through) and the identification (the
+    // felt stiffness, 0 while not identified, and the frame's condensed one), for the trainer.
+    double port_energy_j = 0, passivity_scale = 1;
+    double identified_stiffness_n_per_m = 0, condensed_stiffness_n_per_m = 0;
   };
   haptics::TripleBuffer<std::array<ProbeTick, kMaxDevices>> probes{std::array<ProbeTick, kMaxDevices>{}};
 };

@@ -1,5 +1,6 @@
 // A strip chart for the trainer (Qt's painter, no plotting library): series of (time, value) over
-// the last `window_s` seconds, with an optional horizontal limit line (a budget).
+// the last `window_s` seconds, with an optional horizontal limit line (a budget). The axis spans 0
+// and every value shown, negative ones included.
 #pragma once
 
 #include <QColor>
@@ -42,19 +43,25 @@ class TracePlot : public QWidget {
     QPainter p(this);
     p.fillRect(rect(), QColor(24, 26, 32));
     const QRect area = rect().adjusted(44, 18, -8, -16);
-    double top = limit_ > 0 ? 1.2 * limit_ : 0;
+    double top = limit_ > 0 ? 1.2 * limit_ : 0, bottom = 0;
     for (const auto& s : series_)
-      for (const auto& v : s) top = std::max(top, v.second);
-    top = top > 0 ? top * 1.1 : 1;
+      for (const auto& v : s) top = std::max(top, v.second), bottom = std::min(bottom, v.second);
+    top = top > 0 ? top * 1.1 : (bottom < 0 ? 0 : 1);
+    bottom *= 1.1;
     p.setPen(QColor(200, 200, 200));
     p.drawText(rect().adjusted(4, 2, 0, 0), Qt::AlignLeft | Qt::AlignTop, title_);
     p.drawText(QRect(0, area.top() - 6, 42, 14), Qt::AlignRight, QString::number(top, 'g', 3));
-    p.drawText(QRect(0, area.bottom() - 8, 42, 14), Qt::AlignRight, "0 " + unit_);
+    p.drawText(QRect(0, area.bottom() - 8, 42, 14), Qt::AlignRight,
+               (bottom < 0 ? QString::number(bottom, 'g', 3) : QString("0")) + " " + unit_);
     p.setPen(QColor(70, 70, 80));
     p.drawRect(area);
     const auto x_of = [&](double t) { return area.right() - (now_ - t) / window_s_ * area.width(); };
-    const auto y_of = [&](double v) { return area.bottom() - v / top * area.height(); };
-    if (limit_ > 0) {
+    const auto y_of = [&](double v) { return area.bottom() - (v - bottom) / (top - bottom) * area.height(); };
+    if (bottom < 0) {  // the zero line
+      p.setPen(QPen(QColor(110, 110, 120), 1, Qt::DotLine));
+      p.drawLine(QPointF(area.left(), y_of(0)), QPointF(area.right(), y_of(0)));
+    }
+    if (limit_ > 0 || (bottom < 0 && limit_ == 0 && !limit_label_.isEmpty())) {
       p.setPen(QPen(QColor(230, 80, 80), 1, Qt::DashLine));
       p.drawLine(QPointF(area.left(), y_of(limit_)), QPointF(area.right(), y_of(limit_)));
       p.drawText(QPointF(area.left() + 4, y_of(limit_) - 3), limit_label_);

@@ -116,6 +116,7 @@ void TrainerWindow::show_mode() {
 }
 
 std::string TrainerWindow::message() const { return message_->text().toStdString(); }
+std::string TrainerWindow::status() const { return status_->text().toStdString(); }
 
 void TrainerWindow::reset_camera() {
   if (!view_) return;

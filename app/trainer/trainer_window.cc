@@ -67,12 +67,14 @@ TrainerWindow::TrainerWindow(const config::Scene& scene, const TrainerOptions& s
   frame_plot_->set_series(1);
   margin_plot_ = new TracePlot("stability margin per frame (last 5 s; > 0: robustly stable)", "", 5.0, this);
   margin_plot_->set_series(1);
+  energy_plot_ = new TracePlot("port energy per probe (last 5 s; < 0: the loop handed the hand energy)", "mJ", 5.0, this);
   auto* side = new QWidget(this);
   auto* column = new QVBoxLayout(side);
   column->addWidget(ultrasound_, 3);
   column->addWidget(force_plot_, 1);
   column->addWidget(frame_plot_, 1);
   column->addWidget(margin_plot_, 1);
+  column->addWidget(energy_plot_, 1);
   auto* split = new QSplitter(this);
   split->addWidget(vtk_widget_);
   split->addWidget(side);
@@ -200,6 +202,9 @@ void TrainerWindow::start_take(const std::optional<std::filesystem::path>& recor
   frame_plot_->set_limit(1e3 * session_->solver_period_s(), "budget");
   margin_plot_->clear();
   margin_plot_->set_limit(0, "unstable below");
+  energy_plot_->set_series(static_cast<int>(radii.size()));
+  energy_plot_->clear();
+  energy_plot_->set_limit(0, "generated below");
   last_frame_ = -2, frames_seen_ = 0, overruns_ = 0, imaged_frame_ = -3;
   session_->want_stress(field_ == ColourField::von_mises);
   if (session_->take_snapshot()) shown_ = session_->snapshot();
@@ -273,7 +278,11 @@ void TrainerWindow::tick() {
     const auto& p = monitor.probes.front();
     view_->update_probes(p, probes);
     const double t = monitor.ticks.load() * session_->loop().period_s;
-    for (int i = 0; i < probes && i < SessionMonitor::kMaxDevices; ++i) force_plot_->add(i, t, p[i].force.norm());
+    for (int i = 0; i < probes && i < SessionMonitor::kMaxDevices; ++i) {
+      force_plot_->add(i, t, p[i].force.norm());
+      energy_plot_->add(i, t, 1e3 * p[i].port_energy_j);
+    }
+    last_probes_ = p;
   }
   // The image plane follows the probe at the window's rate (through its proxy on the surface while
   // it touches, else through its patch), the tissue in it at the solver's: a new image is asked for
@@ -296,6 +305,7 @@ void TrainerWindow::tick() {
   force_plot_->update();
   frame_plot_->update();
   margin_plot_->update();
+  energy_plot_->update();
   update_status();
   if (!session_->running() && window_options_.headless) {
     figures_.error = session_->error();
@@ -340,6 +350,16 @@ void TrainerWindow::update_status() {
     << haptics::to_string(model_) << " / " << haptics::to_string(hold_) << "   Kp " << std::lround(shown_.proportional_gain)
     << " Ki " << std::lround(shown_.integral_gain) << "   margin " << shown_.stability_margin << "   late ticks "
     << monitor.late_ticks.load() << "   overruns " << overruns_ << "   ultrasound " << std::lround(ultrasound_hz_) << " img/s";
+  // What the hand feels: the passivity layer when it scales a probe's force, and the identified
+  // stiffness against the frame's (docs/stability.md, sections 9 and 10).
+  const std::vector<std::string>& names = session_->probe_names();
+  for (std::size_t i = 0; i < names.size() && i < last_probes_.size(); ++i) {
+    const SessionMonitor::ProbeTick& p = last_probes_[i];
+    if (p.passivity_scale < 0.999) s << "   PASSIVITY: " << names[i] << " scaled to " << std::lround(100 * p.passivity_scale) << " %";
+    if (p.in_contact && p.identified_stiffness_n_per_m > 0)
+      s << "   " << names[i] << " felt " << std::lround(p.identified_stiffness_n_per_m) << " / tissue "
+        << std::lround(p.condensed_stiffness_n_per_m) << " N/m";
+  }
   if (session_->cursor()) s << "   mouse: shift+move, shift+wheel or [ ] to push";
   status_->setText(QString::fromStdString(s.str()));
 }

@@ -80,6 +80,7 @@ class TrainerWindow : public QMainWindow {
   haptics::LocalModelKind local_model() const { return model_; }  // the mode in force, as last answered
   haptics::HoldKind hold() const { return hold_; }
   std::string message() const;  // the message line
+  std::string status() const;   // the status line (rates, gains, passivity, felt stiffness)
   void move_cursor_along_view(double metres);
   const UltrasoundImage& ultrasound_image() const { return image_; }  // the one shown
   std::optional<std::filesystem::path> recording() const { return recording_; }
@@ -117,7 +118,9 @@ class TrainerWindow : public QMainWindow {
   vtkGenericOpenGLRenderWindow* render_window_ = nullptr;
   vtkRenderer* renderer_ = nullptr;
   QLabel *ultrasound_ = nullptr, *status_ = nullptr, *message_ = nullptr;
-  TracePlot *force_plot_ = nullptr, *frame_plot_ = nullptr, *margin_plot_ = nullptr;
+  TracePlot *force_plot_ = nullptr, *frame_plot_ = nullptr, *margin_plot_ = nullptr, *energy_plot_ = nullptr;
+  // Each probe's last published tick (passivity and identification figures for the status line).
+  std::array<SessionMonitor::ProbeTick, SessionMonitor::kMaxDevices> last_probes_{};
   std::filesystem::path scene_path_;
   QTimer* timer_ = nullptr;
   QComboBox *model_box_ = nullptr, *hold_box_ = nullptr;

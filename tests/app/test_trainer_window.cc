@@ -175,6 +175,41 @@ TEST_F(TrainerWindowTest, PauseStopsTimeResetReturnsToRestRecordReplays) {
   EXPECT_EQ(replay.exit_code, 0) << replay.err;
 }
 
+// What the hand feels, said in the window: on the default-like anatomy the status line shows the
+// stiffness identified from the probe's own signals beside the frame's condensed one while it
+// presses; on the stiff block under the light grip (stiff_block_grip.yaml) the passivity
+// layer scales the probe and the status line says so, while the energy plot runs beside the others.
+TEST_F(TrainerWindowTest, TheStatusLineSaysWhatTheHandFeelsAndWhenThePassivityLayerActs) {
+  // The status line once it shows `text` (waiting up to `ms`), or "" if it never does.
+  const auto wait_for = [](TrainerWindow& w, const std::string& text, int ms) {
+    for (int waited = 0; waited < ms; waited += 50) {
+      const std::string status = w.status();
+      if (status.find(text) != std::string::npos) return status;
+      QTest::qWait(50);
+    }
+    return std::string();
+  };
+  app::trainer::WindowOptions options;
+  options.out = out_;
+  {
+    TrainerWindow w(scene("fetus_simple.yaml"), {}, options);
+    w.show();
+    ASSERT_TRUE(w.session());
+    const std::string status = wait_for(w, " felt ", 3000);
+    std::smatch m;
+    ASSERT_TRUE(std::regex_search(status, m, std::regex("felt (\\d+) / tissue (\\d+) N/m"))) << w.status();
+    const double felt = std::stod(m[1]), tissue = std::stod(m[2]);
+    EXPECT_GT(tissue, 0);
+    EXPECT_NEAR(felt, tissue, 0.5 * tissue);  // mid-press, through the real-time loop
+  }
+  {
+    TrainerWindow w(scene("stiff_block_grip.yaml"), {}, options);
+    w.show();
+    ASSERT_TRUE(w.session());
+    EXPECT_NE(wait_for(w, "PASSIVITY: ", 3000), "") << w.status();
+  }
+}
+
 // The displacement along -n of the patch at `patch` under a force f along -n, by `fetouch solve`.
 double static_depth(const fs::path& scene, const Eigen::Vector3d& patch, const Eigen::Vector3d& n, double f, const fs::path& out) {
   char press[300];
