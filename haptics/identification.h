@@ -73,10 +73,6 @@ class ContactIdentifier {
   double predict_n(double depth_m, double rate_m_per_s) const {
     return theta_(0) * depth_m * 1e3 + theta_(1) * rate_m_per_s * 1e3 + theta_(2);
   }
-  // Depth (m) of a point along the contact's normal since it began (0 outside a contact).
-  double depth_m(const Eigen::Vector3d& position, const Eigen::Vector3d& normal) const {
-    return touching_ ? normal.dot(touch_ - position) : 0.0;
-  }
   long updates() const { return updates_; }
 
  private:
