@@ -39,6 +39,15 @@ haptics::HapticLoopSettings loop_settings(const config::Scene& scene) {
   return s;
 }
 
+haptics::HandParameters hand_parameters(const config::HandModel& hand) {
+  haptics::HandParameters p;
+  p.model = hand.model == config::HandKind::stylus ? haptics::HandModelKind::stylus : haptics::HandModelKind::one_mass;
+  p.mass_kg = hand.mass_kg, p.stiffness_n_per_m = hand.stiffness_n_per_m, p.damping_n_s_per_m = hand.damping_n_s_per_m;
+  p.handle_mass_kg = hand.handle_mass_kg;
+  p.arm_stiffness_n_per_m = hand.arm_stiffness_n_per_m, p.arm_damping_n_s_per_m = hand.arm_damping_n_s_per_m;
+  return p;
+}
+
 std::vector<haptics::HandEvent> hand_events(const config::HandModel& hand) {
   std::vector<haptics::HandEvent> out;
   for (const config::HandEvent& e : hand.events) {
@@ -76,8 +85,7 @@ std::unique_ptr<haptics::Device> make_device(const config::Probe& probe, const c
       if (!path) throw std::runtime_error("probe " + probe.name + ": a " + config::to_string(d.type) + " device needs a trajectory");
       if (d.type == config::DeviceType::replay) return std::make_unique<haptics::ReplayDevice>(*path, settings.period_s);
       return std::make_unique<haptics::VirtualOperator>(
-          *path, haptics::HandParameters{d.hand.mass_kg, d.hand.stiffness_n_per_m, d.hand.damping_n_s_per_m}, settings.period_s,
-          hand_events(d.hand));
+          *path, hand_parameters(d.hand), settings.period_s, hand_events(d.hand));
     case config::DeviceType::phantom: {
       haptics::PhantomSettings p;
       p.name = d.phantom_name;

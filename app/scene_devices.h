@@ -15,7 +15,8 @@ haptics::HapticLoopSettings loop_settings(const config::Scene& scene);
 // The device's workspace mapping and buttons as the scene gives them.
 haptics::WorkspaceMapping workspace_mapping(const config::Device& device);
 
-// The operator hand's scripted events (docs/devices.md), as the device takes them.
+// The operator's hand and its scripted events (docs/devices.md), as the device takes them.
+haptics::HandParameters hand_parameters(const config::HandModel& hand);
 std::vector<haptics::HandEvent> hand_events(const config::HandModel& hand);
 
 // The probe's device: a replay or a virtual operator along `path` (required for those), or a

@@ -259,11 +259,26 @@ struct HandEvent {
   Vec3 direction{0, 0, -1};                       // tremor, impact
 };
 
-struct HandModel {  // the virtual operator: a mass pulled to the target by a spring and a damper
+// The virtual operator's hand (haptics::HandParameters; docs/devices.md). one_mass: a mass pulled
+// to the target by a spring and a damper. stylus: Fu & Cavusoglu's two stages, the handle held by
+// the grip (stiffness, damping) to the hand's mass (mass_kg), which the arm pulls to the target.
+enum class HandKind { one_mass, stylus };
+struct HandModel {
+  HandKind model = HandKind::one_mass;
   double mass_kg = 0.3;
   double stiffness_n_per_m = 300;
   double damping_n_s_per_m = 8;
+  double handle_mass_kg = 0.045;         // stylus only
+  double arm_stiffness_n_per_m = 175;    // stylus only
+  double arm_damping_n_s_per_m = 11;     // stylus only
   std::vector<HandEvent> events;
+  // The stylus's defaults (the same figures as haptics::stylus_hand()).
+  static HandModel stylus() {
+    HandModel h;
+    h.model = HandKind::stylus;
+    h.mass_kg = 0.21, h.stiffness_n_per_m = 575, h.damping_n_s_per_m = 1.3;
+    return h;
+  }
 };
 
 struct Device {

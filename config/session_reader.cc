@@ -193,6 +193,8 @@ const Choices<HandEventType> kHandEvents{{"release", HandEventType::release},
                                          {"tremor", HandEventType::tremor},
                                          {"impact", HandEventType::impact}};
 
+const Choices<HandKind> kHandKinds{{"one_mass", HandKind::one_mass}, {"stylus", HandKind::stylus}};
+
 // hand.events: a list of {type, at_s, ...}; each type takes only its own keys.
 void read_hand_events(MapView& hand, std::vector<HandEvent>& out) {
   const Entry e = hand.entry("events");
@@ -258,8 +260,16 @@ void read_device(MapView& probe, Device& out) {
       if (!map.has("hand")) break;
       const Entry h = map.entry("hand");
       MapView hand(reader, h.value, h.path, h.key_mark,
-                   {"mass_kg", "stiffness_n_per_m", "damping_n_s_per_m", "events"});
+                   {"model", "mass_kg", "stiffness_n_per_m", "damping_n_s_per_m", "handle_mass_kg",
+                    "arm_stiffness_n_per_m", "arm_damping_n_s_per_m", "events"});
       if (!hand.valid()) break;
+      // A stylus starts from its own defaults; a one-mass hand has no handle and no arm.
+      if (hand.choice("model", out.hand.model, kHandKinds) && out.hand.model == HandKind::stylus) out.hand = HandModel::stylus();
+      if (out.hand.model == HandKind::one_mass)
+        reject_keys(hand, {"handle_mass_kg", "arm_stiffness_n_per_m", "arm_damping_n_s_per_m"}, "by a one-mass hand (model: stylus has them)");
+      hand.number("handle_mass_kg", out.hand.handle_mass_kg, plausible::hand_mass_kg);
+      hand.number("arm_stiffness_n_per_m", out.hand.arm_stiffness_n_per_m, plausible::hand_stiffness_n_per_m);
+      hand.number("arm_damping_n_s_per_m", out.hand.arm_damping_n_s_per_m, plausible::hand_damping_n_s_per_m);
       hand.number("mass_kg", out.hand.mass_kg, plausible::hand_mass_kg);
       hand.number("stiffness_n_per_m", out.hand.stiffness_n_per_m, plausible::hand_stiffness_n_per_m);
       hand.number("damping_n_s_per_m", out.hand.damping_n_s_per_m, plausible::hand_damping_n_s_per_m);

@@ -189,11 +189,13 @@ DeviceState ReplayDevice::read() noexcept {
 namespace {
 
 // exp(M) of a small matrix by scaling and squaring a Taylor series (to machine precision).
-Eigen::Matrix3d exponential(const Eigen::Matrix3d& m) {
+template <int N>
+Eigen::Matrix<double, N, N> exponential(const Eigen::Matrix<double, N, N>& m) {
+  using Matrix = Eigen::Matrix<double, N, N>;
   const double norm = m.cwiseAbs().rowwise().sum().maxCoeff();
   const int squarings = norm > 0.5 ? static_cast<int>(std::ceil(std::log2(norm / 0.5))) : 0;
-  const Eigen::Matrix3d a = m / std::pow(2.0, squarings);
-  Eigen::Matrix3d sum = Eigen::Matrix3d::Identity(), term = Eigen::Matrix3d::Identity();
+  const Matrix a = m / std::pow(2.0, squarings);
+  Matrix sum = Matrix::Identity(), term = Matrix::Identity();
   for (int k = 1; k <= 24; ++k) {
     term = term * a / k;
     sum += term;
@@ -205,6 +207,9 @@ Eigen::Matrix3d exponential(const Eigen::Matrix3d& m) {
 void check_hand(const HandParameters& hand) {
   if (!(hand.mass_kg > 0) || !(hand.stiffness_n_per_m > 0) || !(hand.damping_n_s_per_m >= 0))
     throw std::invalid_argument("operator: the hand's mass and stiffness must be positive and its damping not negative");
+  if (hand.model == HandModelKind::stylus &&
+      (!(hand.handle_mass_kg > 0) || !(hand.arm_stiffness_n_per_m > 0) || !(hand.arm_damping_n_s_per_m >= 0)))
+    throw std::invalid_argument("operator: a stylus hand's handle mass and arm stiffness must be positive and its arm damping not negative");
 }
 
 // ZOH discretisation of x' = v, v' = (-k x - b v + u) / m: exp of the augmented matrix.
@@ -214,9 +219,34 @@ void hand_transition(const HandParameters& hand, double period_s, Eigen::Matrix2
   augmented(1, 0) = -hand.stiffness_n_per_m / hand.mass_kg;
   augmented(1, 1) = -hand.damping_n_s_per_m / hand.mass_kg;
   augmented(1, 2) = 1 / hand.mass_kg;
-  const Eigen::Matrix3d e = exponential(augmented * period_s);
+  const Eigen::Matrix3d e = exponential<3>(augmented * period_s);
   phi = e.topLeftCorner<2, 2>();
   gamma = e.block<2, 1>(0, 2);
+}
+
+// The same for the state (x_d, v_d, x_h, v_h) and the inputs (F, x_t, v_t), with the grip (one_mass:
+// the hand's spring and damper; stylus: k1, b1) multiplied by `grip`: exp of the 7 x 7 augmented
+// matrix [A B; 0 0] T.
+void hand_transition(const HandParameters& hand, double grip, double period_s, Eigen::Matrix4d& phi,
+                     Eigen::Matrix<double, 4, 3>& gamma) {
+  Eigen::Matrix<double, 7, 7> m = Eigen::Matrix<double, 7, 7>::Zero();
+  const double k1 = grip * hand.stiffness_n_per_m, b1 = grip * hand.damping_n_s_per_m;
+  m(0, 1) = 1;
+  if (hand.model == HandModelKind::one_mass) {
+    const double md = hand.mass_kg;
+    m(1, 0) = -k1 / md, m(1, 1) = -b1 / md;
+    m(1, 4) = 1 / md, m(1, 5) = k1 / md, m(1, 6) = b1 / md;
+  } else {
+    const double md = hand.handle_mass_kg, mh = hand.mass_kg;
+    const double k2 = hand.arm_stiffness_n_per_m, b2 = hand.arm_damping_n_s_per_m;
+    m(1, 0) = -k1 / md, m(1, 1) = -b1 / md, m(1, 2) = k1 / md, m(1, 3) = b1 / md, m(1, 4) = 1 / md;
+    m(2, 3) = 1;
+    m(3, 0) = k1 / mh, m(3, 1) = b1 / mh, m(3, 2) = -(k1 + k2) / mh, m(3, 3) = -(b1 + b2) / mh;
+    m(3, 5) = k2 / mh, m(3, 6) = b2 / mh;
+  }
+  const Eigen::Matrix<double, 7, 7> e = exponential<7>(Eigen::Matrix<double, 7, 7>(m * period_s));
+  phi = e.topLeftCorner<4, 4>();
+  gamma = e.topRightCorner<4, 3>();
 }
 
 }  // namespace
@@ -244,6 +274,20 @@ void check_event(const HandEvent& e) {
 }
 
 }  // namespace
+
+HandParameters stylus_hand() {
+  HandParameters hand;
+  hand.model = HandModelKind::stylus;
+  hand.mass_kg = 0.21;
+  hand.stiffness_n_per_m = 575;
+  hand.damping_n_s_per_m = 1.3;
+  hand.handle_mass_kg = 0.045;
+  hand.arm_stiffness_n_per_m = 175;
+  hand.arm_damping_n_s_per_m = 11;
+  return hand;
+}
+
+const char* to_string(HandModelKind model) { return model == HandModelKind::stylus ? "stylus" : "one_mass"; }
 
 VirtualOperator::VirtualOperator(const Trajectory& trajectory, const HandParameters& hand, double period_s,
                                  const std::vector<HandEvent>& events)
@@ -295,14 +339,12 @@ VirtualOperator::VirtualOperator(const Trajectory& trajectory, const HandParamet
       continue;
     }
     Grip g;
-    g.stiffness = multiplier[k] * hand.stiffness_n_per_m;
-    g.damping = multiplier[k] * hand.damping_n_s_per_m;
-    hand_transition(HandParameters{hand.mass_kg, g.stiffness, g.damping}, period_s, g.phi, g.gamma);
+    hand_transition(hand, multiplier[k], period_s, g.phi, g.gamma);
     grip_of_tick_[k] = static_cast<int>(known.size());
     known.push_back(multiplier[k]);
     grips_.push_back(g);
   }
-  position_ = targets_.front();
+  position_ = hand_position_ = targets_.front();
   velocity_.setZero();
 }
 
@@ -312,16 +354,15 @@ DeviceState VirtualOperator::read() noexcept {
     const std::size_t k = static_cast<std::size_t>(std::min<long>(tick_ - 1, static_cast<long>(targets_.size()) - 1));
     const Grip& g = grips_[static_cast<std::size_t>(grip_of_tick_[k])];
     const Eigen::Vector3d force = force_.allFinite() ? force_ : Eigen::Vector3d::Zero();
-    const Eigen::Vector3d u = g.stiffness * targets_[k] + g.damping * target_velocities_[k] + force;
     for (int d = 0; d < 3; ++d) {
-      const double x = g.phi(0, 0) * position_[d] + g.phi(0, 1) * velocity_[d] + g.gamma[0] * u[d];
-      const double v = g.phi(1, 0) * position_[d] + g.phi(1, 1) * velocity_[d] + g.gamma[1] * u[d];
-      position_[d] = x, velocity_[d] = v;
+      const Eigen::Vector4d state(position_[d], velocity_[d], hand_position_[d], hand_velocity_[d]);
+      const Eigen::Vector4d next = g.phi * state + g.gamma * Eigen::Vector3d(force[d], targets_[k][d], target_velocities_[k][d]);
+      position_[d] = next[0], velocity_[d] = next[1], hand_position_[d] = next[2], hand_velocity_[d] = next[3];
     }
   }
-  // An impact: the hand arrives at its speed from this tick on.
+  // An impact: the hand arrives at its speed from this tick on (the handle with it).
   while (next_impact_ < impact_ticks_.size() && impact_ticks_[next_impact_] <= tick_)
-    velocity_ = impact_velocities_[next_impact_++];
+    velocity_ = hand_velocity_ = impact_velocities_[next_impact_++];
   ++tick_;
   DeviceState s;
   s.position_m = position_;
@@ -332,6 +373,7 @@ DeviceState VirtualOperator::read() noexcept {
 CursorOperator::CursorOperator(const Eigen::Vector3d& start, const HandParameters& hand, double period_s)
     : cursor_(start), target_(start), position_(start), stiffness_(hand.stiffness_n_per_m) {
   check_hand(hand);
+  if (hand.model != HandModelKind::one_mass) throw std::invalid_argument("operator: the mouse's hand is one mass, not a stylus grip");
   hand_transition(hand, period_s, phi_, gamma_);
 }
 

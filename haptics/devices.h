@@ -2,9 +2,15 @@
 //   - Trajectory: timed probe positions (a CSV of t, x, y, z in s and m, or a recording), resampled
 //     to the haptic rate by linear interpolation, held at its last point after its end.
 //   - ReplayDevice: plays a trajectory back, tick by tick, whatever force it is sent.
-//   - VirtualOperator: a hand model. A mass m pulled towards the trajectory's point (the target)
-//     by a spring k and a damper b, and pushed by the force the device renders:
-//         m x'' = k (x_t - x) + b (v_t - v) + F_device,
+//   - VirtualOperator: a hand model pulled along the trajectory's point (the target) and pushed by
+//     the force the device renders, one of two (HandParameters::model):
+//       one_mass: a mass m pulled towards the target by a spring k and a damper b,
+//         m x'' = k (x_t - x) + b (v_t - v) + F_device;
+//       stylus (Fu & Cavusoglu 2012's stylus grip): the handle (the device's own mass m_d) held
+//         by the fingers' grip (k1, b1) to the hand's mass m_h, which the arm (k2, b2) pulls to the
+//         target,
+//         m_d x_d'' = k1 (x_h - x_d) + b1 (v_h - v_d) + F_device,
+//         m_h x_h'' = k1 (x_d - x_h) + b1 (v_d - v_h) + k2 (x_t - x_h) + b2 (v_t - v_h);
 //     integrated exactly over each tick for inputs held over the tick (zero-order hold: the state
 //     transition exp(A T) and its input matrix, computed once), so the force fed back changes the
 //     motion as a real hand's would.
@@ -86,21 +92,37 @@ class ReplayDevice final : public Device {
   long tick_ = 0;
 };
 
+enum class HandModelKind { one_mass, stylus };
+
+// one_mass: mass_kg, stiffness and damping are the hand's (the project's default hand, 0.3 kg, 300
+// N/m, 8 N s/m). stylus: they are the hand's mass m_h and the grip's k1 and b1 (the stage a grip
+// event tightens and a release lets go), and the handle's mass and the arm's k2 and b2 come in;
+// stylus_hand() has Fu & Cavusoglu's figures (docs/devices.md).
 struct HandParameters {
   double mass_kg = 0.3;
   double stiffness_n_per_m = 300;
   double damping_n_s_per_m = 8;
+  HandModelKind model = HandModelKind::one_mass;
+  double handle_mass_kg = 0.045;          // stylus: m_d, the device's apparent mass at its tip
+  double arm_stiffness_n_per_m = 175;     // stylus: k2
+  double arm_damping_n_s_per_m = 11;      // stylus: b2
 };
 
+// The stylus grip at the middle of Fu & Cavusoglu's (IEEE TSMC-B 42(6), 2012) identified means:
+// m_h 0.21 kg (0.20-0.22), k1 575 N/m (380-770), b1 1.3 N s/m (0.8-1.8), k2 175 N/m (79-272),
+// b2 11 N s/m (4.6-18); the handle 45 g (a PHANTOM Omni's apparent tip mass).
+HandParameters stylus_hand();
+const char* to_string(HandModelKind model);
+
 // What an operator may do that tries the loop (passivity-and-identification.md, docs/devices.md):
-//   - release at t: the hand's spring and damper drop to zero in one tick; only the mass (the
-//     device's own) is left, and nothing pulls it to the target any more;
-//   - grip at t: the spring and damper are multiplied by `factor`, reached linearly over ramp_s
-//     (a grip tightening x3 within 10 ms);
+//   - release at t: the hand's spring and damper (a stylus: the grip's, k1 and b1) drop to zero in
+//     one tick; only the mass (a stylus: the handle's) is left, and nothing pulls it to the target;
+//   - grip at t: the spring and damper (a stylus: k1 and b1) are multiplied by `factor`, reached
+//     linearly over ramp_s (a grip tightening x3 within 10 ms);
 //   - tremor from t: the target moves by amplitude_m sin(2 pi f (time - t)) along `direction`
 //     (physiological tremor: 6-12 Hz, 0.05-0.5 mm);
-//   - impact at t: the hand's velocity becomes speed_m_per_s along `direction` (a probe arriving
-//     at 200 mm/s).
+//   - impact at t: the hand's velocity (a stylus: both masses') becomes speed_m_per_s along
+//     `direction` (a probe arriving at 200 mm/s).
 enum class HandEventKind { release, grip, tremor, impact };
 struct HandEvent {
   HandEventKind kind = HandEventKind::release;
@@ -128,12 +150,12 @@ class VirtualOperator final : public Device {
   const Eigen::Vector3d& velocity() const { return velocity_; }
 
  private:
-  // The hand over one tick: exp(A T), A = [0 1; -k/m -b/m], and int_0^T exp(A s) ds [0; 1/m],
-  // with the k and b it pulls with.
+  // The hand over one tick for the state (x_d, v_d, x_h, v_h) of one axis and the inputs (F, x_t,
+  // v_t) held over it: exp(A T) and int_0^T exp(A s) ds B, with the grip it holds by (one_mass:
+  // x_h and v_h take no part).
   struct Grip {
-    Eigen::Matrix2d phi;
-    Eigen::Vector2d gamma;
-    double stiffness = 0, damping = 0;
+    Eigen::Matrix4d phi;
+    Eigen::Matrix<double, 4, 3> gamma;
   };
   std::vector<Eigen::Vector3d> targets_, target_velocities_;
   std::vector<Grip> grips_;             // the hand's grips: [0] as given, then those events make
@@ -142,6 +164,7 @@ class VirtualOperator final : public Device {
   std::vector<Eigen::Vector3d> impact_velocities_;
   std::size_t next_impact_ = 0;
   Eigen::Vector3d position_, velocity_, force_ = Eigen::Vector3d::Zero();
+  Eigen::Vector3d hand_position_, hand_velocity_ = Eigen::Vector3d::Zero();  // stylus: x_h, v_h
   long tick_ = 0;
 };
 
@@ -151,7 +174,8 @@ class VirtualOperator final : public Device {
 // writer (set_target), the haptic tick the reader. Goes on until the session is stopped.
 class CursorOperator final : public Device {
  public:
-  // Starts at rest at `start`; throws std::invalid_argument as VirtualOperator does.
+  // Starts at rest at `start`; throws std::invalid_argument as VirtualOperator does, and for a
+  // stylus hand (the mouse's hand is one mass).
   CursorOperator(const Eigen::Vector3d& start, const HandParameters& hand, double period_s);
   // Any one thread (not the tick's): the cursor's new place.
   void set_target(const Eigen::Vector3d& target) noexcept {

@@ -53,6 +53,7 @@ const char* const kModes[] = {"off", "on", "hannaford_ryu"};
 const char* const kEvents[] = {"none", "release", "grip", "tremor8", "tremor10", "tremor12", "impact"};
 
 void check_options(const PassivityOptions& o) {
+  if (o.hand != "one_mass" && o.hand != "stylus") throw std::invalid_argument("--hand: unknown hand model '" + o.hand + "' (one_mass, stylus)");
   for (const std::string& m : o.modes)
     if (std::find(std::begin(kModes), std::end(kModes), m) == std::end(kModes))
       throw std::invalid_argument("--modes: unknown mode '" + m + "' (off, on, hannaford_ryu)");
@@ -67,13 +68,19 @@ void check_options(const PassivityOptions& o) {
   positive(o.masses, "--masses", false), positive(o.stiffnesses, "--stiffnesses", false), positive(o.dampings, "--dampings", true);
 }
 
-config::Scene with_hand(const config::Scene& base, const Hand& hand, const std::string& event, double at_s,
-                        const config::Vec3& press, const std::string& mode) {
+// The hand model's defaults: its handle and arm, and the nominal hand.
+config::HandModel hand_defaults(const std::string& model) {
+  return model == "stylus" ? config::HandModel::stylus() : config::HandModel{};
+}
+
+config::Scene with_hand(const config::Scene& base, const config::HandModel& model, const Hand& hand, const std::string& event,
+                        double at_s, const config::Vec3& press, const std::string& mode) {
   config::Scene scene = base;
   for (config::Probe& p : scene.probes) {
     if (p.device.trajectory.empty())
       throw std::invalid_argument("probe '" + p.name + "' has no trajectory: the study's hand follows a probe's trajectory");
     p.device.type = config::DeviceType::operator_model;
+    p.device.hand = model;
     p.device.hand.mass_kg = hand.mass_kg;
     p.device.hand.stiffness_n_per_m = hand.stiffness_n_per_m;
     p.device.hand.damping_n_s_per_m = hand.damping_n_s_per_m;
@@ -174,7 +181,7 @@ int run_study_passivity(const PassivityOptions& o) {
   for (double m : o.masses)
     for (double k : o.stiffnesses)
       for (double b : o.dampings) box.push_back({m, k, b, false});
-  const config::HandModel defaults;
+  const config::HandModel defaults = hand_defaults(o.hand);
   const Hand nominal{defaults.mass_kg, defaults.stiffness_n_per_m, defaults.damping_n_s_per_m, true};
   const long total = static_cast<long>(o.modes.size() * (1 + box.size() * o.events.size())) + 1;
   Progress progress("study passivity", total, std::cerr, Progress::stderr_is_terminal());
@@ -185,7 +192,7 @@ int run_study_passivity(const PassivityOptions& o) {
   std::vector<Run> runs;
   const config::Vec3 down{0, 0, -1};
   std::vector<Eigen::Vector3d> reference_forces;
-  Run reference = run_one(with_hand(base, nominal, "none", 0, down, "off"), nominal, "none", "off", max_ticks, &reference_forces);
+  Run reference = run_one(with_hand(base, defaults, nominal, "none", 0, down, "off"), nominal, "none", "off", max_ticks, &reference_forces);
   progress.update(++done);
   if (!reference.error.empty()) throw std::runtime_error("the nominal run (the default hand, layer off) failed: " + reference.error);
   long first = -1, last = -1;
@@ -203,11 +210,11 @@ int run_study_passivity(const PassivityOptions& o) {
   log::info() << "study passivity: events at " << event_at << " s, along (" << press[0] << ", " << press[1] << ", " << press[2] << ")";
 
   for (const std::string& mode : o.modes) {
-    runs.push_back(mode == "off" ? reference : run_one(with_hand(base, nominal, "none", 0, down, mode), nominal, "none", mode, max_ticks));
+    runs.push_back(mode == "off" ? reference : run_one(with_hand(base, defaults, nominal, "none", 0, down, mode), nominal, "none", mode, max_ticks));
     progress.update(++done);
     for (const std::string& event : o.events)
       for (const Hand& h : box) {
-        runs.push_back(run_one(with_hand(base, h, event, event_at, press, mode), h, event, mode, max_ticks));
+        runs.push_back(run_one(with_hand(base, defaults, h, event, event_at, press, mode), h, event, mode, max_ticks));
         runs.back().force.clear();  // the nominal runs' forces are plotted; the box's are summed up
         runs.back().force.shrink_to_fit();
         progress.update(++done);
@@ -270,6 +277,10 @@ int run_study_passivity(const PassivityOptions& o) {
      << ". Every probe is held by the virtual operator (docs/devices.md) along its own trajectory.\n\n"
      << "- Hands: masses " << o.masses.size() << ", grip stiffnesses " << o.stiffnesses.size() << ", dampings " << o.dampings.size()
      << " (" << box.size() << " hands), and the default hand (" << hand_text(nominal) << ") for the nominal run.\n"
+     << (o.hand == "stylus" ? "- The hand is the two-stage stylus grip (Fu & Cavusoglu 2012): the masses are the hand's, the stiffnesses and "
+                              "dampings the grip's; the handle " + num(defaults.handle_mass_kg) + " kg, the arm " +
+                              num(defaults.arm_stiffness_n_per_m) + " N/m and " + num(defaults.arm_damping_n_s_per_m) + " N s/m.\n"
+                            : std::string())
      << "- Events at " << num(event_at) << " s (the middle of the default hand's contact, first touch to last), along (" << num(press[0]) << ", "
      << num(press[1]) << ", " << num(press[2]) << ") (into the tissue): release; grip x3 in 10 ms; tremor 8, 10, 12 Hz of "
      << "0.5 mm; impact at 200 mm/s.\n"

@@ -210,9 +210,14 @@ RandomScene random_scene(unsigned int seed, int index) {
     devices += (devices.empty() ? "" : "+") + device;
     y << "  - name: probe" << p << "\n    radius_m: " << number(draw.turn<double>("radius", {0.001, 0.003, 0.005, 0.01}))
       << "\n    device:\n      type: " << device << "\n      trajectory: " << file << "\n";
-    if (device == "operator" && draw.chance(0.7))
-      y << "      hand: {mass_kg: " << number(draw.uniform(0.02, 0.6)) << ", stiffness_n_per_m: " << number(draw.uniform(230, 1040))
-        << ", damping_n_s_per_m: " << number(draw.uniform(0.5, 10)) << "}\n";
+    if (device == "operator" && draw.chance(0.7)) {
+      const std::string hand = draw.turn<std::string>("hand_model", {"one_mass", "stylus"});
+      y << "      hand: {model: " << hand << ", mass_kg: " << number(draw.uniform(0.02, 0.6))
+        << ", stiffness_n_per_m: " << number(draw.uniform(230, 1040)) << ", damping_n_s_per_m: " << number(draw.uniform(0.5, 10));
+      if (hand == "stylus")  // Fu & Cavusoglu's ranges for the arm (docs/devices.md)
+        y << ", arm_stiffness_n_per_m: " << number(draw.uniform(63, 533)) << ", arm_damping_n_s_per_m: " << number(draw.uniform(3.7, 27.6));
+      y << "}\n";
+    }
   }
   s.yaml = y.str();
   char summary[256];

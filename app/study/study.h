@@ -62,6 +62,9 @@ struct PassivityOptions : StudyOptions {
   std::vector<std::string> events{"none", "release", "grip", "tremor8", "tremor10", "tremor12", "impact"};
   std::vector<std::string> modes{"off", "on", "hannaford_ryu"};
   double duration_s = 0;  // of the trajectory; 0: all of it
+  // The hand model the box sweeps: one_mass (mass, spring, damper) or stylus (the masses are the
+  // hand's, the stiffnesses and dampings the grip's; the handle and the arm at their defaults).
+  std::string hand = "one_mass";
 };
 int run_study_passivity(const PassivityOptions& options);
 

@@ -116,6 +116,11 @@ void add_study_command(CLI::App& parent, int& exit_code) {
   passivity->add_option("--dampings", p->dampings, "Grip dampings, N s/m")->delimiter(',')->capture_default_str();
   passivity->add_option("--events", p->events, "none, release, grip, tremor8, tremor10, tremor12, impact")->delimiter(',');
   passivity->add_option("--modes", p->modes, "off, on, hannaford_ryu")->delimiter(',');
+  passivity->add_option("--hand", p->hand,
+                        "one_mass (mass, spring, damper) or stylus (Fu & Cavusoglu's two stages: the masses are the hand's, "
+                        "the stiffnesses and dampings the grip's)")
+      ->check(CLI::IsMember({"one_mass", "stylus"}))
+      ->capture_default_str();
   passivity->add_option("--duration", p->duration_s, "Seconds of the trajectory to replay (0: all)")
       ->check(CLI::Range(0.0, 3600.0))->capture_default_str();
   passivity->add_flag("--quick", p->quick, "A corner of the box: masses 0.02,0.57, stiffnesses 230,2000, dampings 0.5,8; events none, release, tremor10, impact");

@@ -119,5 +119,43 @@ TEST(PassivityReplay, StiffBlockUnderALightGripRingsWithoutTheLayerAndIsStillWit
   fs::remove_all(dir);
 }
 
+// The stylus hand (Fu & Cavusoglu's two stages, scene key hand: {model: stylus}) through the real
+// binary: block_press poked by it and held 1 s at 8 mm. Once still, the handle sits above the
+// target by the force over the two stages in series, F (1/k1 + 1/k2) with the stylus defaults
+// (575 and 175 N/m: 7.45 mm per newton), not F / k of the one-mass hand (300 N/m: 3.33 mm per N).
+TEST(PassivityReplay, AStylusHandHoldsAboveItsTargetByTheForceOverItsStagesInSeries) {
+  const fs::path dir = fs::temp_directory_path() / ("fetouch_stylus_" + std::to_string(::getpid()));
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  const fs::path shipped = fs::path(FETOUCH_SOURCE_DIR) / "config/scenes/block_press.yaml";
+  std::ifstream in(shipped);
+  std::stringstream text;
+  text << in.rdbuf();
+  std::string s = text.str();
+  const std::string device = "      type: replay\n      trajectory: trajectories/poke_block.csv\n";
+  ASSERT_NE(s.find(device), std::string::npos);
+  s.replace(s.find(device), device.size(),
+            "      type: operator\n      trajectory: " + (shipped.parent_path() / "trajectories/poke_block.csv").string() +
+                "\n      hand: {model: stylus}\n");
+  const fs::path scene = dir / "stylus.yaml";
+  std::ofstream(scene) << s;
+  const Replayed run = replay(dir, scene);
+  ASSERT_EQ(run.samples.size(), 3001u);
+
+  // The poke's target holds z = 0.042 m from 1.0 s to 2.0 s; the last 0.2 s of it.
+  double force = 0, gap = 0, low = 1e300, high = -1e300;
+  int n = 0;
+  for (const auto& sample : run.samples)
+    if (sample.time_s >= 1.8 && sample.time_s <= 2.0) {
+      force += sample.force.z(), gap += sample.position.z() - 0.042, ++n;
+      low = std::min(low, sample.force.z()), high = std::max(high, sample.force.z());
+    }
+  force /= n, gap /= n;
+  ASSERT_GT(force, 0.05) << "the stylus must press the block";
+  EXPECT_LT(high - low, 0.01 * force) << "still";
+  EXPECT_NEAR(gap, force * (1 / 575.0 + 1 / 175.0), 0.02 * gap);
+  fs::remove_all(dir);
+}
+
 }  // namespace
 }  // namespace fetouch::testing

@@ -251,6 +251,19 @@ TEST(StudyPassivity, TheHardCaseRingsWithTheLayerOffAndFarLessWithItOn) {
   r = run_command(fetouch("-q study passivity " + scene + " --modes off,bogus --out " + out.string()));
   EXPECT_EQ(r.exit_code, 2);
   EXPECT_NE(r.err.find("bogus"), std::string::npos) << r.err;
+  r = run_command(fetouch("-q study passivity " + scene + " --hand glove --out " + out.string()));
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("glove"), std::string::npos) << r.err;
+  // The stylus grip: the nominal run is the default stylus (0.21 kg, 575 N/m, 1.3 N s/m), the box's
+  // hands are its grip stages, and the report says so.
+  r = run_command(fetouch("-q study passivity " + scene + " --hand stylus --masses 0.02 --stiffnesses 1040 --dampings 0.5 "
+                          "--events none --modes off --duration 1.2 --out " + out.string()));
+  ASSERT_EQ(r.exit_code, 0) << r.out << r.err;
+  const Table stylus = read_table(out / "table.csv");
+  ASSERT_EQ(stylus.rows.size(), 2u);
+  EXPECT_EQ(stylus.number(0, "mass_kg"), 0.21);
+  EXPECT_EQ(stylus.number(0, "stiffness_n_per_m"), 575);
+  EXPECT_NE(read_file_text(out / "report.md").find("two-stage stylus"), std::string::npos);
   fs::remove_all(out);
 }
 

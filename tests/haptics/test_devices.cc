@@ -6,6 +6,7 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include <array>
 #include <cmath>
 #include <complex>
 #include <filesystem>
@@ -237,6 +238,109 @@ TEST(VirtualOperator, ImpactSetsTheHandsSpeed) {
   for (int k = 0; k <= 200; ++k) s = op.read();
   EXPECT_NEAR(s.velocity_m_per_s.z(), -0.2, 1e-15);
   EXPECT_NEAR(s.velocity_m_per_s.x(), 0, 1e-15);
+}
+
+// The stylus grip (Fu & Cavusoglu's two stages) against a second method: the same equations
+// integrated by classical Runge-Kutta at 1/200 of a tick, with the force and the target held over
+// each tick as the device holds them. A force that changes every tick and a target that moves.
+TEST(VirtualOperatorStylus, MatchesRungeKuttaOfTheTwoStageEquations) {
+  const HandParameters hand = stylus_hand();
+  Trajectory path;
+  path.times_s = {0, 0.3, 1};
+  path.positions_m = {Eigen::Vector3d::Zero(), Eigen::Vector3d(0, 0, -0.006), Eigen::Vector3d(0.004, 0, -0.006)};
+  const double T = 1e-3;
+  VirtualOperator op(path, hand, T);
+  const std::vector<Eigen::Vector3d> targets = path.resampled(T);
+  const auto force_at = [](int k) { return Eigen::Vector3d(0.3 * std::sin(0.05 * k), 0, 1.5 * (1 - std::cos(0.02 * k))); };
+  // Per axis: y = (x_d, v_d, x_h, v_h).
+  const auto rate = [&](const Eigen::Vector4d& y, double f, double xt, double vt) {
+    const double k1 = hand.stiffness_n_per_m, b1 = hand.damping_n_s_per_m;
+    const double k2 = hand.arm_stiffness_n_per_m, b2 = hand.arm_damping_n_s_per_m;
+    const double grip = k1 * (y[2] - y[0]) + b1 * (y[3] - y[1]);
+    return Eigen::Vector4d(y[1], (grip + f) / hand.handle_mass_kg, y[3],
+                           (-grip + k2 * (xt - y[2]) + b2 * (vt - y[3])) / hand.mass_kg);
+  };
+  std::array<Eigen::Vector4d, 3> y;
+  for (int d = 0; d < 3; ++d) y[d] = Eigen::Vector4d(targets[0][d], 0, targets[0][d], 0);
+  double worst = 0, largest = 0;
+  op.read();  // tick 0: at rest on the first point
+  for (int k = 0; k + 1 < static_cast<int>(targets.size()); ++k) {
+    const Eigen::Vector3d f = force_at(k);
+    op.write(f);
+    const Eigen::Vector3d x = op.read().position_m;
+    const Eigen::Vector3d vt = (targets[k + 1 == static_cast<int>(targets.size()) ? k : k + 1] - targets[k == 0 ? 0 : k - 1]) /
+                               ((k == 0 ? 1.0 : 2.0) * T);
+    const int substeps = 200;
+    const double h = T / substeps;
+    for (int d = 0; d < 3; ++d) {
+      for (int s = 0; s < substeps; ++s) {
+        const Eigen::Vector4d a = rate(y[d], f[d], targets[k][d], vt[d]);
+        const Eigen::Vector4d b = rate(y[d] + h / 2 * a, f[d], targets[k][d], vt[d]);
+        const Eigen::Vector4d c = rate(y[d] + h / 2 * b, f[d], targets[k][d], vt[d]);
+        const Eigen::Vector4d e = rate(y[d] + h * c, f[d], targets[k][d], vt[d]);
+        y[d] += h / 6 * (a + 2 * b + 2 * c + e);
+      }
+      worst = std::max(worst, std::abs(x[d] - y[d][0]));
+      largest = std::max(largest, std::abs(y[d][0]));
+    }
+  }
+  EXPECT_GT(largest, 0.005);       // the handle moved millimetres
+  EXPECT_LT(worst, 1e-9 * largest);
+}
+
+// Held still against a steady force F, the two stages deflect in series: the handle settles at
+// x_t + F (1/k1 + 1/k2); a grip tightened x3 (k1 only) leaves x_t + F (1/(3 k1) + 1/k2).
+TEST(VirtualOperatorStylus, StagesDeflectInSeriesAndAGripTightensTheFirst) {
+  const HandParameters hand = stylus_hand();
+  Trajectory still;
+  still.times_s = {0, 12};
+  still.positions_m = {Eigen::Vector3d(0, 0, 0.05), Eigen::Vector3d(0, 0, 0.05)};
+  HandEvent grip;
+  grip.kind = HandEventKind::grip;
+  grip.at_s = 6;
+  grip.factor = 3;
+  VirtualOperator op(still, hand, 1e-3, {grip});
+  const double f = 2, k1 = hand.stiffness_n_per_m, k2 = hand.arm_stiffness_n_per_m;
+  Eigen::Vector3d x;
+  for (int k = 0; k < 6000; ++k) x = op.next(Eigen::Vector3d(0, 0, f));
+  EXPECT_NEAR(x.z(), 0.05 + f * (1 / k1 + 1 / k2), 1e-8);
+  for (int k = 0; k < 5999; ++k) x = op.next(Eigen::Vector3d(0, 0, f));
+  EXPECT_NEAR(x.z(), 0.05 + f * (1 / (3 * k1) + 1 / k2), 1e-8);
+}
+
+// Released, the fingers let go of the handle: the force alone moves the device's own mass,
+// x(t) = x_r + v_r t + F t^2 / (2 m_d) (to rounding), whatever the arm behind it does.
+TEST(VirtualOperatorStylus, ReleasedHandleMovesAsItsOwnMassUnderTheForce) {
+  const HandParameters hand = stylus_hand();
+  Trajectory still;
+  still.times_s = {0, 2};
+  still.positions_m = {Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero()};
+  HandEvent release;
+  release.kind = HandEventKind::release;
+  release.at_s = 0.5;
+  VirtualOperator op(still, hand, 1e-3, {release});
+  const double f = 0.5;
+  DeviceState at_release;
+  for (int k = 0; k <= 500; ++k) {
+    op.write(Eigen::Vector3d(0, 0, f));
+    at_release = op.read();
+  }
+  double worst = 0;
+  for (int k = 501; k <= 700; ++k) {
+    op.write(Eigen::Vector3d(0, 0, f));
+    const DeviceState s = op.read();
+    const double t = (k - 500) * 1e-3;
+    const double expected = at_release.position_m.z() + at_release.velocity_m_per_s.z() * t + f * t * t / (2 * hand.handle_mass_kg);
+    worst = std::max(worst, std::abs(s.position_m.z() - expected));
+  }
+  EXPECT_LT(worst, 1e-12);
+  HandParameters bad = stylus_hand();
+  bad.handle_mass_kg = 0;
+  EXPECT_THROW(VirtualOperator(still, bad, 1e-3), std::invalid_argument);
+  bad = stylus_hand();
+  bad.arm_damping_n_s_per_m = -1;
+  EXPECT_THROW(VirtualOperator(still, bad, 1e-3), std::invalid_argument);
+  EXPECT_THROW(CursorOperator(Eigen::Vector3d::Zero(), stylus_hand(), 1e-3), std::invalid_argument);
 }
 
 TEST(VirtualOperator, RefusesANonPhysicalHand) {
