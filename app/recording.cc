@@ -101,7 +101,7 @@ struct RecordingWriter::Impl {
   hid_t file = -1;
   struct DeviceSeries {
     std::unique_ptr<Series> time, position, velocity, force, proxy, penetration, normal_force, in_contact;
-    std::unique_ptr<Series> port_energy, passivity_scale, identified_stiffness, identified_damping, condensed_stiffness;
+    std::unique_ptr<Series> port_energy, passivity_scale, controller_force, identified_stiffness, identified_damping, condensed_stiffness;
   };
   std::vector<DeviceSeries> devices;
   std::unique_ptr<Series> frame, time, solve, residual, margin, iterations, converged, eigenvalues, gains, mode;
@@ -156,6 +156,7 @@ RecordingWriter::RecordingWriter(const std::filesystem::path& path, const Record
     d.in_contact = std::make_unique<Series>(g, "in_contact", H5T_NATIVE_UINT8, 1, r.name);
     d.port_energy = std::make_unique<Series>(g, "port_energy_j", H5T_NATIVE_DOUBLE, 1, r.name);
     d.passivity_scale = std::make_unique<Series>(g, "passivity_scale", H5T_NATIVE_DOUBLE, 1, r.name);
+    d.controller_force = std::make_unique<Series>(g, "controller_force_n", H5T_NATIVE_DOUBLE, 3, r.name);
     d.identified_stiffness = std::make_unique<Series>(g, "identified_stiffness_n_per_m", H5T_NATIVE_DOUBLE, 1, r.name);
     d.identified_damping = std::make_unique<Series>(g, "identified_damping_n_s_per_m", H5T_NATIVE_DOUBLE, 1, r.name);
     d.condensed_stiffness = std::make_unique<Series>(g, "condensed_stiffness_n_per_m", H5T_NATIVE_DOUBLE, 1, r.name);
@@ -197,7 +198,7 @@ RecordingWriter::~RecordingWriter() {
 
 void RecordingWriter::append(int device, const DeviceSample* samples, std::size_t count) {
   Impl::DeviceSeries& d = impl_->devices.at(static_cast<std::size_t>(device));
-  std::vector<double> time(count), position(3 * count), velocity(3 * count), force(3 * count), proxy(3 * count),
+  std::vector<double> time(count), position(3 * count), velocity(3 * count), force(3 * count), proxy(3 * count), control(3 * count),
       penetration(count), normal(count), energy(count), scale(count), identified(count), damping(count), condensed(count);
   std::vector<std::uint8_t> contact(count);
   for (std::size_t i = 0; i < count; ++i) {
@@ -208,7 +209,7 @@ void RecordingWriter::append(int device, const DeviceSample* samples, std::size_
     condensed[i] = s.condensed_stiffness_n_per_m;
     for (int k = 0; k < 3; ++k) {
       position[3 * i + k] = s.position[k], velocity[3 * i + k] = s.velocity[k];
-      force[3 * i + k] = s.force[k], proxy[3 * i + k] = s.proxy[k];
+      force[3 * i + k] = s.force[k], proxy[3 * i + k] = s.proxy[k], control[3 * i + k] = s.controller_force[k];
     }
   }
   d.time->append(time.data(), count);
@@ -221,6 +222,7 @@ void RecordingWriter::append(int device, const DeviceSample* samples, std::size_
   d.in_contact->append(contact.data(), count);
   d.port_energy->append(energy.data(), count);
   d.passivity_scale->append(scale.data(), count);
+  d.controller_force->append(control.data(), count);
   d.identified_stiffness->append(identified.data(), count);
   d.identified_damping->append(damping.data(), count);
   d.condensed_stiffness->append(condensed.data(), count);

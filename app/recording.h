@@ -7,7 +7,7 @@
 //   /devices/<probe>/      one row per haptic tick:
 //       time_s [n]; position_m, velocity_m_per_s, force_n, proxy_m [n x 3];
 //       penetration_m, normal_force_n [n]; in_contact [n] (0/1);
-//       port_energy_j, passivity_scale [n] (the passivity layer);
+//       port_energy_j, passivity_scale [n], controller_force_n [n x 3] (the passivity layer);
 //       identified_stiffness_n_per_m, identified_damping_n_s_per_m [n] (on-line identification:
 //       0 until the contact has moved enough), condensed_stiffness_n_per_m [n] (the newest frame's
 //       (W_n^-1)_cc, what the identification is compared with)
@@ -55,6 +55,9 @@ struct DeviceSample {
   // rendering (J; negative: the loop handed the hand energy), and the share s of the local model's
   // force the layer let through (1: untouched). Recordings before 2026-11-26 read back 0 and 1.
   double port_energy_j = 0, passivity_scale = 1;
+  // The controller's force c: what it changed in the force the device can be sent (N; zero when
+  // it did nothing). Recordings before 2026-11-27 read back zero.
+  Eigen::Vector3d controller_force = Eigen::Vector3d::Zero();
   // On-line identification (haptics/identification.h): the stiffness and damping the hand feels,
   // identified from the device's own signals (0 while not identified: out of contact, or too
   // little motion yet), and the stiffness the newest frame condensed for this contact.

@@ -161,6 +161,8 @@ Recording read_recording(const std::filesystem::path& path) {
                                  H5Lexists(g, "passivity_scale", H5P_DEFAULT) > 0;  // since 2026-11-26
       const auto energy = has_passivity ? read_all(g, "port_energy_j", 1, name) : std::vector<double>{};
       const auto scale = has_passivity ? read_all(g, "passivity_scale", 1, name) : std::vector<double>{};
+      const bool has_control = H5Lexists(g, "controller_force_n", H5P_DEFAULT) > 0;  // since 2026-11-27
+      const auto control = has_control ? read_all(g, "controller_force_n", 3, name) : std::vector<double>{};
       const bool has_identification = H5Lexists(g, "identified_stiffness_n_per_m", H5P_DEFAULT) > 0 &&
                                       H5Lexists(g, "identified_damping_n_s_per_m", H5P_DEFAULT) > 0 &&
                                       H5Lexists(g, "condensed_stiffness_n_per_m", H5P_DEFAULT) > 0;  // since 2026-11-26
@@ -174,6 +176,7 @@ Recording read_recording(const std::filesystem::path& path) {
                                    proxy.size() / 3, penetration.size(), normal.size(), contact.size()});
       if (has_passivity) rows = std::min({rows, energy.size(), scale.size()});
       if (has_identification) rows = std::min({rows, identified.size(), damping.size(), condensed.size()});
+      if (has_control) rows = std::min(rows, control.size() / 3);
       RecordedDevice d;
       d.name = probe;
       d.samples.resize(rows);
@@ -187,6 +190,7 @@ Recording read_recording(const std::filesystem::path& path) {
         for (int k = 0; k < 3; ++k) {
           s.position[k] = position[3 * r + k], s.velocity[k] = velocity[3 * r + k];
           s.force[k] = force[3 * r + k], s.proxy[k] = proxy[3 * r + k];
+          if (has_control) s.controller_force[k] = control[3 * r + k];
         }
       }
       out.header.probes.push_back(d.name);

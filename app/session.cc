@@ -87,6 +87,7 @@ class SessionBase {
     s.in_contact = out.in_contact;
     s.port_energy_j = out.port_energy_j;
     s.passivity_scale = out.passivity_scale;
+    s.controller_force = out.controller_force;
     s.identified_stiffness_n_per_m = out.identified ? out.identified_stiffness_n_per_m : 0.0;
     s.identified_damping_n_s_per_m = out.identified ? out.identified_damping_n_s_per_m : 0.0;
     s.condensed_stiffness_n_per_m = out.condensed_stiffness_n_per_m;

@@ -194,6 +194,7 @@ const std::vector<ContactOutput>& HapticLoop::tick(const std::vector<Eigen::Vect
     local_model_.set_integrating(c, !(out.force.norm() < kUncutShare * requested.norm()));
     out.port_energy_j = port.energy_j();
     out.passivity_scale = port.scale();
+    out.controller_force = port.controller_force();
     audit_force_[c] = out.force;
     audit_in_contact_[c] = out.in_contact;
     ContactIdentifier& identifier = identifiers_[c];

@@ -92,6 +92,9 @@ struct ContactOutput {
   bool in_contact = false;
   double port_energy_j = 0;      // E: energy from the hand into the rendering so far (passivity.h)
   double passivity_scale = 1;    // s: the share of the local model's force the layer let through
+  // c: the change the layer's controller made to what the device can be sent (PassivityPort::
+  // controller_force(); zero when it did nothing, with the layer off or observing).
+  Eigen::Vector3d controller_force = Eigen::Vector3d::Zero();
   // On-line identification (identification.h): K and B of the force sent against the device's
   // depth, valid once the contact has moved enough; and the newest frame's (W_n^-1)_cc.
   double identified_stiffness_n_per_m = 0, identified_damping_n_s_per_m = 0;

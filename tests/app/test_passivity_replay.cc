@@ -96,6 +96,24 @@ TEST(PassivityReplay, StiffBlockUnderALightGripRingsWithoutTheLayerAndIsStillWit
   for (const auto& s : shipped.samples) lowest_scale = std::min(lowest_scale, s.passivity_scale);
   EXPECT_NEAR(on["probes"][0]["min_scale"].as<double>(), lowest_scale, 1e-12);
 
+  // The controller's force per tick: none while observing; with the layer on, its largest is the
+  // summary's, and on every tick the safety layer let through untouched it is what the scaling
+  // took away, min(F_c, clamp) n - f (n along the force sent, F_c the local model's request).
+  double largest = 0;
+  long checked = 0, agree = 0;
+  for (const auto& s : observed.samples) ASSERT_EQ(s.controller_force.norm(), 0.0);
+  for (const auto& s : shipped.samples) {
+    largest = std::max(largest, s.controller_force.norm());
+    if (s.force.norm() < 1e-9 || s.normal_force <= 0) continue;
+    const Eigen::Vector3d expected = std::min(s.normal_force, clamp) * s.force.normalized() - s.force;
+    ++checked;
+    agree += (s.controller_force - expected).norm() < 1e-9;
+  }
+  EXPECT_NEAR(on["probes"][0]["max_controller_force_n"].as<double>(), largest, 1e-12);
+  EXPECT_GT(largest, 0.5);
+  EXPECT_GT(checked, 1000);
+  EXPECT_GT(agree, 0.9 * checked) << agree << " of " << checked;
+
   // The frame-rate energy audit: the hand's energy over the audited frames is the port observer's
   // at the tick that closed the last of them; the frames that generated (over 1 uJ) are the
   // summary's; unprotected, most frames of the ringing hold generate, with the layer few do.

@@ -45,6 +45,7 @@ DeviceSample sample(int device, long k) {
   s.proxy = s.position + Eigen::Vector3d(0, 0, 1e-4);
   s.penetration = 1e-5 * (k % 13), s.normal_force = 0.5 * (k % 7), s.in_contact = k % 3 == 0;
   s.port_energy_j = -1e-6 * (k % 11), s.passivity_scale = 1.0 / (1 + k % 5);
+  s.controller_force = Eigen::Vector3d(0.01 * (k % 3), -0.02 * (k % 7), 0.5 / (1 + k));
   s.identified_stiffness_n_per_m = 40.0 + k % 17, s.identified_damping_n_s_per_m = -0.1 * (k % 3);
   s.condensed_stiffness_n_per_m = 45.0 + device;
   return s;
@@ -97,6 +98,7 @@ TEST(Recording, RoundTripKeepsEveryValue) {
       EXPECT_EQ(g.in_contact, e.in_contact);
       EXPECT_EQ(g.port_energy_j, e.port_energy_j);
       EXPECT_EQ(g.passivity_scale, e.passivity_scale);
+      EXPECT_EQ(g.controller_force, e.controller_force);
       EXPECT_EQ(g.identified_stiffness_n_per_m, e.identified_stiffness_n_per_m);
       EXPECT_EQ(g.identified_damping_n_s_per_m, e.identified_damping_n_s_per_m);
       EXPECT_EQ(g.condensed_stiffness_n_per_m, e.condensed_stiffness_n_per_m);
