@@ -212,21 +212,9 @@ void check_hand(const HandParameters& hand) {
     throw std::invalid_argument("operator: a stylus hand's handle mass and arm stiffness must be positive and its arm damping not negative");
 }
 
-// ZOH discretisation of x' = v, v' = (-k x - b v + u) / m: exp of the augmented matrix.
-void hand_transition(const HandParameters& hand, double period_s, Eigen::Matrix2d& phi, Eigen::Vector2d& gamma) {
-  Eigen::Matrix3d augmented = Eigen::Matrix3d::Zero();
-  augmented(0, 1) = 1;
-  augmented(1, 0) = -hand.stiffness_n_per_m / hand.mass_kg;
-  augmented(1, 1) = -hand.damping_n_s_per_m / hand.mass_kg;
-  augmented(1, 2) = 1 / hand.mass_kg;
-  const Eigen::Matrix3d e = exponential<3>(augmented * period_s);
-  phi = e.topLeftCorner<2, 2>();
-  gamma = e.block<2, 1>(0, 2);
-}
-
-// The same for the state (x_d, v_d, x_h, v_h) and the inputs (F, x_t, v_t), with the grip (one_mass:
-// the hand's spring and damper; stylus: k1, b1) multiplied by `grip`: exp of the 7 x 7 augmented
-// matrix [A B; 0 0] T.
+// ZOH discretisation of the hand for the state (x_d, v_d, x_h, v_h) and the inputs (F, x_t, v_t),
+// with the grip (one_mass: the hand's spring and damper, x_h and v_h idle; stylus: k1, b1)
+// multiplied by `grip`: exp of the 7 x 7 augmented matrix [A B; 0 0] T.
 void hand_transition(const HandParameters& hand, double grip, double period_s, Eigen::Matrix4d& phi,
                      Eigen::Matrix<double, 4, 3>& gamma) {
   Eigen::Matrix<double, 7, 7> m = Eigen::Matrix<double, 7, 7>::Zero();
@@ -374,7 +362,12 @@ CursorOperator::CursorOperator(const Eigen::Vector3d& start, const HandParameter
     : cursor_(start), target_(start), position_(start), stiffness_(hand.stiffness_n_per_m) {
   check_hand(hand);
   if (hand.model != HandModelKind::one_mass) throw std::invalid_argument("operator: the mouse's hand is one mass, not a stylus grip");
-  hand_transition(hand, period_s, phi_, gamma_);
+  // One mass: (x, v) and its response to the force alone; the cursor's pull is k times that.
+  Eigen::Matrix4d phi;
+  Eigen::Matrix<double, 4, 3> gamma;
+  hand_transition(hand, 1.0, period_s, phi, gamma);
+  phi_ = phi.topLeftCorner<2, 2>();
+  gamma_ = gamma.block<2, 1>(0, 0);
 }
 
 DeviceState CursorOperator::read() noexcept {
