@@ -360,139 +360,164 @@ VolumeMesh mesh_labels(const MaskVolume& labels, const std::vector<MeshRegion>& 
   const Criteria criteria(params::edge_size = SizeAt{size, 1.0}, params::facet_angle = 25,
                           params::facet_size = SizeAt{size, kFacetRadiusPerEdge}, params::facet_distance = distance_at,
                           params::cell_radius_edge_ratio = 3, params::cell_size = SizeAt{size, kCellRadiusPerEdge});
-  std::function<int(const Kernel::Point_3&)> region_of = RegionOf{indicators, {}};
-  const double sigma_mm = s.label_smoothing_voxels * *std::max_element(labels.spacing_mm.begin(), labels.spacing_mm.end());
-  // Across a blurred step two indicators part with slope 2 / (sigma sqrt(2 pi)) per mm.
-  const double slope = sigma_mm > 0 ? 2 / (sigma_mm * std::sqrt(2 * M_PI)) : 1;
-  // A first mesh finds where the regions meet; the later ones keep those curves (each surface then
-  // ends on a smooth curve instead of a ragged chain of whatever edges reached it). Each mesh's
-  // region volumes correct the regions' biases for the next: a first step from the blurred
-  // step's slope, then a secant step on what the first changed.
-  std::vector<Polyline> junctions;
-  Complex complex;
-  const std::size_t fields = indicators->size();
-  std::vector<double> bias(fields, 0.0);
-  const double voxel_mm3 = labels.spacing_mm[0] * labels.spacing_mm[1] * labels.spacing_mm[2];
-  constexpr int passes = 3;
-  for (int pass = 0; pass < passes; ++pass) {
-    CGAL::get_default_random() = CGAL::Random(1);
-    CGAL::Random random(1);
-    Domain domain(region_of, box, 1e-6, &random);
-    domain.add_features(junctions.begin(), junctions.end());
-    complex = Complex();
-    std::ostringstream told;  // CGAL tells of the pieces it seeds on the standard output: kept off it
-    std::streambuf* const was = std::cout.rdbuf(told.rdbuf());
-    try {
-      ::initialize_triangulation_from_labeled_image(complex, domain, image, criteria, std::uint8_t(), !junctions.empty());
-      CGAL::refine_mesh_3(complex, domain, criteria, params::no_perturb(), params::no_exude());
-    } catch (...) {
+  // One mesh from a seed of CGAL's generator (where refinement places its first points). Whether
+  // perturbation, exudation and the repair reach the angle asked hangs on the mesh: on the default
+  // anatomy two of seven seeds fell short (6.2 and 9.4 degrees, against 10.1 to 10.6), and a machine
+  // whose arithmetic differs in the last bits meshes differently. So a mesh short of the angle is
+  // made again from the next seed, up to kSeeds; the best is kept.
+  const auto attempt = [&](unsigned seed) -> VolumeMesh {
+    const auto step = [&](const std::string& what, double fraction) {
+      report(seed == 1 ? what : what + " (seed " + std::to_string(seed) + ")", fraction);
+    };
+    std::function<int(const Kernel::Point_3&)> region_of = RegionOf{indicators, {}};
+    const double sigma_mm = s.label_smoothing_voxels * *std::max_element(labels.spacing_mm.begin(), labels.spacing_mm.end());
+    // Across a blurred step two indicators part with slope 2 / (sigma sqrt(2 pi)) per mm.
+    const double slope = sigma_mm > 0 ? 2 / (sigma_mm * std::sqrt(2 * M_PI)) : 1;
+    // A first mesh finds where the regions meet; the later ones keep those curves (each surface then
+    // ends on a smooth curve instead of a ragged chain of whatever edges reached it). Each mesh's
+    // region volumes correct the regions' biases for the next: a first step from the blurred
+    // step's slope, then a secant step on what the first changed.
+    std::vector<Polyline> junctions;
+    Complex complex;
+    const std::size_t fields = indicators->size();
+    std::vector<double> bias(fields, 0.0);
+    const double voxel_mm3 = labels.spacing_mm[0] * labels.spacing_mm[1] * labels.spacing_mm[2];
+    constexpr int passes = 3;
+    for (int pass = 0; pass < passes; ++pass) {
+      CGAL::get_default_random() = CGAL::Random(seed);
+      CGAL::Random random{seed};
+      Domain domain(region_of, box, 1e-6, &random);
+      domain.add_features(junctions.begin(), junctions.end());
+      complex = Complex();
+      std::ostringstream told;  // CGAL tells of the pieces it seeds on the standard output: kept off it
+      std::streambuf* const was = std::cout.rdbuf(told.rdbuf());
+      try {
+        ::initialize_triangulation_from_labeled_image(complex, domain, image, criteria, std::uint8_t(), !junctions.empty());
+        CGAL::refine_mesh_3(complex, domain, criteria, params::no_perturb(), params::no_exude());
+      } catch (...) {
+        std::cout.rdbuf(was);
+        throw;
+      }
       std::cout.rdbuf(was);
-      throw;
-    }
-    std::cout.rdbuf(was);
-    if (pass + 1 == passes) break;
-    if (pass == 0) {  // the junctions, then a mesh along them measures what the biases must correct
-      junctions = junction_curves(complex);
-      continue;
-    }
-    // The biases that give every region its voxels' volume, to first order: a surface between
-    // regions r and q moves by (b_r - b_q) / slope, so region r gains sum_q A_rq (b_r - b_q) / slope:
-    // a graph Laplacian over the regions (the background's bias held at 0), solved by elimination.
-    const RegionMeasure m = measure_regions(complex, fields);
-    const std::size_t R = fields - 1;
-    std::vector<double> L(R * R, 0.0), rhs(R, 0.0);
-    for (const auto& [pair, a] : m.between) {
-      const auto [r, q] = pair;
-      if (r > 0) L[(r - 1) * R + (r - 1)] += a;
-      if (q > 0) L[(q - 1) * R + (q - 1)] += a;
-      if (r > 0 && q > 0) L[(r - 1) * R + (q - 1)] -= a, L[(q - 1) * R + (r - 1)] -= a;
-    }
-    for (std::size_t r = 0; r < R; ++r) {
-      rhs[r] = voxels[r + 1] > 0 ? (double(voxels[r + 1]) * voxel_mm3 - m.volume[r + 1]) * slope : 0;
-      if (L[r * R + r] <= 0) L[r * R + r] = 1, rhs[r] = 0;  // a region without a surface keeps its bias
-    }
-    for (std::size_t k = 0; k < R; ++k)  // symmetric positive definite: no pivoting
-      for (std::size_t i = k + 1; i < R; ++i) {
-        const double f = L[i * R + k] / L[k * R + k];
-        for (std::size_t j = k; j < R; ++j) L[i * R + j] -= f * L[k * R + j];
-        rhs[i] -= f * rhs[k];
+      if (pass + 1 == passes) break;
+      if (pass == 0) {  // the junctions, then a mesh along them measures what the biases must correct
+        junctions = junction_curves(complex);
+        continue;
       }
-    for (std::size_t k = R; k-- > 0;) {
-      double x = rhs[k];
-      for (std::size_t j = k + 1; j < R; ++j) x -= L[k * R + j] * bias[j + 1];
-      bias[k + 1] = std::clamp(x / L[k * R + k], -0.25, 0.25);
+      // The biases that give every region its voxels' volume, to first order: a surface between
+      // regions r and q moves by (b_r - b_q) / slope, so region r gains sum_q A_rq (b_r - b_q) / slope:
+      // a graph Laplacian over the regions (the background's bias held at 0), solved by elimination.
+      const RegionMeasure m = measure_regions(complex, fields);
+      const std::size_t R = fields - 1;
+      std::vector<double> L(R * R, 0.0), rhs(R, 0.0);
+      for (const auto& [pair, a] : m.between) {
+        const auto [r, q] = pair;
+        if (r > 0) L[(r - 1) * R + (r - 1)] += a;
+        if (q > 0) L[(q - 1) * R + (q - 1)] += a;
+        if (r > 0 && q > 0) L[(r - 1) * R + (q - 1)] -= a, L[(q - 1) * R + (r - 1)] -= a;
+      }
+      for (std::size_t r = 0; r < R; ++r) {
+        rhs[r] = voxels[r + 1] > 0 ? (double(voxels[r + 1]) * voxel_mm3 - m.volume[r + 1]) * slope : 0;
+        if (L[r * R + r] <= 0) L[r * R + r] = 1, rhs[r] = 0;  // a region without a surface keeps its bias
+      }
+      for (std::size_t k = 0; k < R; ++k)  // symmetric positive definite: no pivoting
+        for (std::size_t i = k + 1; i < R; ++i) {
+          const double f = L[i * R + k] / L[k * R + k];
+          for (std::size_t j = k; j < R; ++j) L[i * R + j] -= f * L[k * R + j];
+          rhs[i] -= f * rhs[k];
+        }
+      for (std::size_t k = R; k-- > 0;) {
+        double x = rhs[k];
+        for (std::size_t j = k + 1; j < R; ++j) x -= L[k * R + j] * bias[j + 1];
+        bias[k + 1] = std::clamp(x / L[k * R + k], -0.25, 0.25);
+      }
+      region_of = RegionOf{indicators, bias};
+      step("Delaunay refinement along the junctions", 0.1 + 0.2 * (pass + 1));
     }
-    region_of = RegionOf{indicators, bias};
-    report("Delaunay refinement along the junctions", 0.1 + 0.2 * (pass + 1));
-  }
-  {
-    report("sliver perturbation and exudation", 0.7);
-    CGAL::get_default_random() = CGAL::Random(1);
-    CGAL::Random random(1);
-    Domain domain(region_of, box, 1e-6, &random);
-    domain.add_features(junctions.begin(), junctions.end());
-    const double budget = std::max(5.0, seconds());
-    // CGAL stops improving an element once it passes the bound; 15 degrees leaves the repair below
-    // fewer elements under 10 than a bound at the angle asked (8.2 against 10.8 degrees on the phantom).
-    const double bound = std::max(15.0, s.min_dihedral_deg + 5);
-    // Five Lloyd iterations first (a fixed count, not a time: the mesh is the same on any machine):
-    // they even out the node spacing, surface nodes included, so that fewer slivers are left for
-    // perturbation and exudation (10.8 against 5.3 degrees on the phantom before the repair).
-    CGAL::lloyd_optimize_mesh_3(complex, domain, params::time_limit = 0, params::max_iteration_number = 5,
-                                params::convergence = 0.02, params::freeze_bound = 0.01);
-    CGAL::perturb_mesh_3(complex, domain, params::time_limit = budget, params::sliver_bound = bound);
-    CGAL::exude_mesh_3(complex, params::time_limit = budget, params::sliver_bound = bound);
-  }
+    {
+      step("sliver perturbation and exudation", 0.7);
+      CGAL::get_default_random() = CGAL::Random(seed);
+      CGAL::Random random{seed};
+      Domain domain(region_of, box, 1e-6, &random);
+      domain.add_features(junctions.begin(), junctions.end());
+      // CGAL stops improving an element once it passes the bound; 15 degrees leaves the repair below
+      // fewer elements under 10 than a bound at the angle asked (8.2 against 10.8 degrees on the phantom).
+      const double bound = std::max(15.0, s.min_dihedral_deg + 5);
+      // Five Lloyd iterations first (a fixed count, not a time: the mesh is the same on any machine):
+      // they even out the node spacing, surface nodes included, so that fewer slivers are left for
+      // perturbation and exudation (10.8 against 5.3 degrees on the phantom before the repair).
+      CGAL::lloyd_optimize_mesh_3(complex, domain, params::time_limit = 0, params::max_iteration_number = 5,
+                                  params::convergence = 0.02, params::freeze_bound = 0.01);
+      // No time limit on either: a limit made the mesh hang on the machine's speed (CI's busier
+      // machine stopped perturbation early and left 8.9 degrees where this one reaches 10).
+      // (Unbounded, perturbation takes 5.2 s and exudation 0.2 s on the default anatomy.)
+      CGAL::perturb_mesh_3(complex, domain, params::time_limit = 0, params::sliver_bound = bound);
+      CGAL::exude_mesh_3(complex, params::time_limit = 0, params::sliver_bound = bound);
+    }
 
-  // 4. The cells and their regions, in space (metres).
-  report("regions", 0.95);
-  VolumeMesh mesh;
-  const Triangulation& tr = complex.triangulation();
-  std::unordered_map<Triangulation::Vertex_handle, int> node_of;
-  const auto node = [&](Triangulation::Vertex_handle v) {
-    auto [it, added] = node_of.try_emplace(v, static_cast<int>(mesh.nodes_m.size()));
-    if (added) {
-      const auto g = tr.point(v).point();
-      const double grid[3] = {g.x() - kPad * labels.spacing_mm[0], g.y() - kPad * labels.spacing_mm[1],
-                              g.z() - kPad * labels.spacing_mm[2]};
-      Point3 q{};
-      for (int r = 0; r < 3; ++r) {
-        q[std::size_t(r)] = labels.origin_mm[std::size_t(r)];
-        for (int c = 0; c < 3; ++c) q[std::size_t(r)] += dir[std::size_t(3 * r + c)] * grid[c];
-        q[std::size_t(r)] *= 1e-3;
+    // 4. The cells and their regions, in space (metres).
+    step("regions", 0.95);
+    VolumeMesh mesh;
+    const Triangulation& tr = complex.triangulation();
+    std::unordered_map<Triangulation::Vertex_handle, int> node_of;
+    const auto node = [&](Triangulation::Vertex_handle v) {
+      auto [it, added] = node_of.try_emplace(v, static_cast<int>(mesh.nodes_m.size()));
+      if (added) {
+        const auto g = tr.point(v).point();
+        const double grid[3] = {g.x() - kPad * labels.spacing_mm[0], g.y() - kPad * labels.spacing_mm[1],
+                                g.z() - kPad * labels.spacing_mm[2]};
+        Point3 q{};
+        for (int r = 0; r < 3; ++r) {
+          q[std::size_t(r)] = labels.origin_mm[std::size_t(r)];
+          for (int c = 0; c < 3; ++c) q[std::size_t(r)] += dir[std::size_t(3 * r + c)] * grid[c];
+          q[std::size_t(r)] *= 1e-3;
+        }
+        mesh.nodes_m.push_back(q);
       }
-      mesh.nodes_m.push_back(q);
+      return it->second;
+    };
+    for (auto cell = complex.cells_in_complex_begin(); cell != complex.cells_in_complex_end(); ++cell) {
+      Tet t{node(cell->vertex(0)), node(cell->vertex(1)), node(cell->vertex(2)), node(cell->vertex(3))};
+      const auto& p = mesh.nodes_m;
+      if (tet_signed_volume(p[std::size_t(t[0])], p[std::size_t(t[1])], p[std::size_t(t[2])], p[std::size_t(t[3])]) < 0)
+        std::swap(t[2], t[3]);
+      mesh.tetrahedra.push_back(t);
+      mesh.region.push_back(complex.subdomain_index(cell) - 1);
     }
-    return it->second;
+    if (mesh.tetrahedra.empty()) throw std::runtime_error("meshing: the label map gave no element at this size");
+    // What perturbation and exudation left under the angle asked: flips within a region and nodes
+    // moved along their surfaces (meshes/tet_repair.h), the interfaces kept.
+    mesh.repair = repair_slivers(mesh.nodes_m, mesh.tetrahedra, std::max(15.0, s.min_dihedral_deg + 2), &mesh.region);
+    mesh.boundary = boundary_faces(mesh.tetrahedra, &mesh.closed_manifold);
+    mesh.surface_triangles = static_cast<long>(mesh.boundary.size());
+    mesh.quality = mesh_quality(mesh.nodes_m, mesh.tetrahedra);
+    mesh.volume_m3 = mesh.quality.volume_m3;
+    const double voxel_m3 = labels.spacing_mm[0] * labels.spacing_mm[1] * labels.spacing_mm[2] * 1e-9;
+    for (std::size_t r = 1; r < voxels.size(); ++r) mesh.segmented_volume_m3 += double(voxels[r]) * voxel_m3;
+    report_regions(mesh, labels, regions);
+    mesh.surfaces = surface_smoothness(mesh, labels, regions);
+    // The smallest dihedral angle asked is the test; the radius ratio is reported (a Delaunay mesh's
+    // worst elements after exudation are slivers by both measures, and the angle is the one asked).
+    mesh.quality_met = mesh.quality.min_dihedral_deg >= s.min_dihedral_deg;
+    mesh.path = "conforming: CGAL Mesh_3 on the label map (smoothed indicators), perturbed and exuded" +
+                (seed == 1 ? std::string() : ", seed " + std::to_string(seed));
+    return mesh;
   };
-  for (auto cell = complex.cells_in_complex_begin(); cell != complex.cells_in_complex_end(); ++cell) {
-    Tet t{node(cell->vertex(0)), node(cell->vertex(1)), node(cell->vertex(2)), node(cell->vertex(3))};
-    const auto& p = mesh.nodes_m;
-    if (tet_signed_volume(p[std::size_t(t[0])], p[std::size_t(t[1])], p[std::size_t(t[2])], p[std::size_t(t[3])]) < 0)
-      std::swap(t[2], t[3]);
-    mesh.tetrahedra.push_back(t);
-    mesh.region.push_back(complex.subdomain_index(cell) - 1);
+
+  constexpr unsigned kSeeds = 3;
+  VolumeMesh best;
+  std::vector<std::string> tried;
+  for (unsigned seed = 1; seed <= kSeeds; ++seed) {
+    VolumeMesh mesh = attempt(seed);
+    tried.push_back(mesh.path);
+    const bool better = seed == 1 || mesh.quality.min_dihedral_deg > best.quality.min_dihedral_deg;
+    if (better) best = std::move(mesh);
+    if (best.quality_met) break;
   }
-  if (mesh.tetrahedra.empty()) throw std::runtime_error("meshing: the label map gave no element at this size");
-  // What perturbation and exudation left under the angle asked: flips within a region and nodes
-  // moved along their surfaces (meshes/tet_repair.h), the interfaces kept.
-  mesh.repair = repair_slivers(mesh.nodes_m, mesh.tetrahedra, std::max(15.0, s.min_dihedral_deg + 2), &mesh.region);
-  mesh.boundary = boundary_faces(mesh.tetrahedra, &mesh.closed_manifold);
-  mesh.surface_triangles = static_cast<long>(mesh.boundary.size());
-  mesh.quality = mesh_quality(mesh.nodes_m, mesh.tetrahedra);
-  mesh.volume_m3 = mesh.quality.volume_m3;
-  const double voxel_m3 = labels.spacing_mm[0] * labels.spacing_mm[1] * labels.spacing_mm[2] * 1e-9;
-  for (std::size_t r = 1; r < voxels.size(); ++r) mesh.segmented_volume_m3 += double(voxels[r]) * voxel_m3;
-  report_regions(mesh, labels, regions);
-  mesh.surfaces = surface_smoothness(mesh, labels, regions);
-  // The smallest dihedral angle asked is the test; the radius ratio is reported (a Delaunay mesh's
-  // worst elements after exudation are slivers by both measures, and the angle is the one asked).
-  mesh.quality_met = mesh.quality.min_dihedral_deg >= s.min_dihedral_deg;
-  mesh.path = "conforming: CGAL Mesh_3 on the label map (smoothed indicators), perturbed and exuded";
-  mesh.attempts = {mesh.path};
-  mesh.phases = {{"labelled Delaunay mesh", seconds()}};
+  best.attempts = tried;
+  best.phases = {{"labelled Delaunay mesh", seconds()}};
   report("done", 1.0);
-  return mesh;
+  return best;
 }
 
 }  // namespace fetouch::meshes

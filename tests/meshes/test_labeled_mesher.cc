@@ -11,6 +11,7 @@
 #include <cmath>
 #include <map>
 #include <set>
+#include <string>
 
 #include "meshes/interface_quality.h"
 #include "meshes/labeled_mesher.h"
@@ -174,6 +175,27 @@ TEST(ConformingMesh, TheVotedPathsInterfacesAreStaircasesByTheSameMeasure) {
   voted.surfaces = surface_smoothness(voted, labels, kRegions);
   EXPECT_GT(surface(voted, "shell_liquid").median_angle_deg, 30);
   EXPECT_LT(surface(voted, "shell_outside").median_angle_deg, 10);  // the union's own surface is smooth
+}
+
+TEST(ConformingMesh, AMeshShortOfTheAngleIsMadeAgainFromOtherSeedsAndTheBestKept) {
+  // The first mesh's smallest angle, then the same asked a hair above it: the first seed falls
+  // short, so the mesher must try others, keep one no worse than the first, and say whether it met
+  // the angle by the angle it has.
+  MeshingSettings s;
+  s.element_size_mm = 6;
+  const MaskVolume labels = three_labels();
+  const VolumeMesh first = mesh_labels(labels, kRegions, s);
+  ASSERT_EQ(first.attempts.size(), 1u) << "the first seed already fell short of " << s.min_dihedral_deg;
+  s.min_dihedral_deg = first.quality.min_dihedral_deg + 1e-3;
+  const VolumeMesh again = mesh_labels(labels, kRegions, s);
+  ASSERT_GE(again.attempts.size(), 2u);
+  EXPECT_LE(again.attempts.size(), 3u);
+  EXPECT_EQ(std::set<std::string>(again.attempts.begin(), again.attempts.end()).size(), again.attempts.size());
+  EXPECT_EQ(again.attempts.front(), first.path);
+  EXPECT_GE(again.quality.min_dihedral_deg, first.quality.min_dihedral_deg);
+  EXPECT_EQ(again.quality_met, again.quality.min_dihedral_deg >= s.min_dihedral_deg);
+  if (!again.quality_met) EXPECT_EQ(again.attempts.size(), 3u);  // all tried before giving up
+  else EXPECT_EQ(again.path, again.attempts.back());              // the one that met it, the last tried
 }
 
 TEST(ConformingMesh, BadRequestsAreRefusedWithTheirReason) {
