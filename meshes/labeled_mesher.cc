@@ -362,9 +362,10 @@ VolumeMesh mesh_labels(const MaskVolume& labels, const std::vector<MeshRegion>& 
                           params::cell_radius_edge_ratio = 3, params::cell_size = SizeAt{size, kCellRadiusPerEdge});
   // One mesh from a seed of CGAL's generator (where refinement places its first points). Whether
   // perturbation, exudation and the repair reach the angle asked hangs on the mesh: on the default
-  // anatomy two of seven seeds fell short (6.2 and 9.4 degrees, against 10.1 to 10.6), and a machine
-  // whose arithmetic differs in the last bits meshes differently. So a mesh short of the angle is
-  // made again from the next seed, up to kSeeds; the best is kept.
+  // anatomy seeds 1 to 9 reach 10.1 to 10.6 degrees but three fall short (6.2, 9.4 and 8.0), and a
+  // machine whose arithmetic differs in the last bits meshes differently. So a mesh short of the
+  // angle is made again from the next seed, up to kSeeds (four: about one request in eighty fails
+  // at that rate); the best is kept.
   const auto attempt = [&](unsigned seed) -> VolumeMesh {
     const auto step = [&](const std::string& what, double fraction) {
       report(seed == 1 ? what : what + " (seed " + std::to_string(seed) + ")", fraction);
@@ -504,7 +505,7 @@ VolumeMesh mesh_labels(const MaskVolume& labels, const std::vector<MeshRegion>& 
     return mesh;
   };
 
-  constexpr unsigned kSeeds = 3;
+  constexpr unsigned kSeeds = 4;
   VolumeMesh best;
   std::vector<std::string> tried;
   for (unsigned seed = 1; seed <= kSeeds; ++seed) {

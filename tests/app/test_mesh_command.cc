@@ -179,7 +179,10 @@ TEST(MeshCommand, ConformingRegionsOfThePhantomHaveSmoothInterfaces) {
   for (const auto& surface : j["surfaces"]) {
     SCOPED_TRACE(surface["name"].as<std::string>());
     EXPECT_LE(surface["median_neighbour_angle_deg"].as<double>(), 10);
-    EXPECT_LE(surface["p99_neighbour_angle_deg"].as<double>(), 35);
+    // Staircases have 58-89 degrees here; smooth meshes of this anatomy, seeds 1 to 9 of the mesher,
+    // 33.0-34.6 on fluid_body (the worst surface, its limbs) and under 21 elsewhere: 37 leaves room
+    // for a machine that meshes a little differently.
+    EXPECT_LE(surface["p99_neighbour_angle_deg"].as<double>(), 37);
     EXPECT_LE(surface["max_distance_to_labels_mm"].as<double>(), std::sqrt(3.0));
   }
   for (const auto& region : j["regions"])

@@ -189,12 +189,12 @@ TEST(ConformingMesh, AMeshShortOfTheAngleIsMadeAgainFromOtherSeedsAndTheBestKept
   s.min_dihedral_deg = first.quality.min_dihedral_deg + 1e-3;
   const VolumeMesh again = mesh_labels(labels, kRegions, s);
   ASSERT_GE(again.attempts.size(), 2u);
-  EXPECT_LE(again.attempts.size(), 3u);
+  EXPECT_LE(again.attempts.size(), 4u);  // the mesher's four seeds
   EXPECT_EQ(std::set<std::string>(again.attempts.begin(), again.attempts.end()).size(), again.attempts.size());
   EXPECT_EQ(again.attempts.front(), first.path);
   EXPECT_GE(again.quality.min_dihedral_deg, first.quality.min_dihedral_deg);
   EXPECT_EQ(again.quality_met, again.quality.min_dihedral_deg >= s.min_dihedral_deg);
-  if (!again.quality_met) EXPECT_EQ(again.attempts.size(), 3u);  // all tried before giving up
+  if (!again.quality_met) EXPECT_EQ(again.attempts.size(), 4u);  // all tried before giving up
   else EXPECT_EQ(again.path, again.attempts.back());              // the one that met it, the last tried
 }
 
