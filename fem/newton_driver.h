@@ -72,6 +72,9 @@ struct SolveReport {
   int factorisations = 0;
   // A background factorisation was under way during the solve (the worker shares the machine).
   bool background = false;
+  // One was taken up at the solve's start (its wait is in factorisation_s: background_wait_s).
+  bool background_taken = false;
+  double background_wait_s = 0;
   // Each term's own time: its assembly (part of assembly_s) and the rest of its own work (a cavity's
   // restorations and step completions, which solve with the factorisation: part of solve_s), with
   // the linear iterations that work took.

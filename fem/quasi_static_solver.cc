@@ -26,6 +26,14 @@ std::string describe_frame(const SolveReport& r, const ComplianceTimes& c) {
                 1e3 * c.factorisation_s, 1e3 * c.solves_s, c.linear_iterations, c.galerkin_residual,
                 c.refined ? ", solved" : "");
   std::string text = line;
+  // The background factorisation: one taken up at the start (and how long the frame waited for
+  // it), or one still being made (the worker shares the machine with this frame).
+  if (r.background_taken) {
+    std::snprintf(line, sizeof line, "; background factorisation taken up (waited %.1f ms)", 1e3 * r.background_wait_s);
+    text += line;
+  } else if (r.background) {
+    text += "; background factorisation under way";
+  }
   if (!r.terms.empty()) {  // where the assembly went, per term (and a term's own solves)
     text += "; terms";
     for (const SolveReport::TermTime& t : r.terms) {
@@ -183,7 +191,9 @@ SolveReport QuasiStaticSolver::solve(const NewtonSettings& s) {
   // A solve that continues from a converged one (a haptic frame, a time step) never waits for a
   // factorisation: stale ones are replaced in the background.
   const bool background = m.system.tangent().background_under_way();
+  const int factorisations_before = m.system.tangent().factorisations();
   const double waited = m.system.tangent().begin_frame(m.driver.loaded());
+  const bool taken = m.system.tangent().factorisations() != factorisations_before;
   if (m.inertia && m.inertia->dynamics().rayleigh_stiffness_s != 0 && !m.damping) {
     // beta K0: the elastic tangent's values at the reference state, constrained diagonals zero.
     Vector<double> zero(m.d.n_dofs()), r(m.d.n_dofs());
@@ -231,6 +241,8 @@ SolveReport QuasiStaticSolver::solve(const NewtonSettings& s) {
   SolveReport report = m.driver.solve(s, predictor, handover_error);
   report.factorisation_s += waited;  // for a background factorisation taken up now
   report.background = background || m.system.tangent().background_under_way();
+  report.background_taken = taken;
+  report.background_wait_s = waited;
   const std::vector<Term*>& terms = m.driver.terms();
   for (std::size_t i = 0; i < terms.size() && i < m.driver.term_times.size(); ++i) {
     report.terms.push_back(m.driver.term_times[i]);

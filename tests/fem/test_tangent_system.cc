@@ -56,6 +56,45 @@ TEST(TangentSystem, SolvesExactlyThenByCgOnTheOldFactorisation) {
   EXPECT_EQ(k.factorisations(), 1);
 }
 
+// Inside frames a drifted factorisation is not replaced at once: a new one of K as it was when CG
+// first needed more than refactor_after_iterations is made in the background and taken up
+// swap_after_frames frames later (deterministically here, as lockstep replays run); until then CG
+// on the old one carries the solves. After the swap CG against the factorisation of this very K
+// takes one iteration.
+TEST(TangentSystem, ADriftedFactorisationIsReplacedFromTheBackgroundThreeFramesLater) {
+  const int n = 200;
+  TangentSystem k;
+  k.set_deterministic(true);
+  tridiagonal(k, n, 2.0);
+  std::vector<double> b(n), x(n);
+  for (int i = 0; i < n; ++i) b[i] = std::sin(0.1 * i) + 0.5;
+  k.begin_frame(true);
+  EXPECT_TRUE(k.solve(b.data(), x.data(), 1e-10, true).refactored);
+  ASSERT_EQ(k.factorisations(), 1);
+  // 2.05 on the diagonal: the old factorisation's preconditioned spectrum spans 1.01 to about 200.
+  tridiagonal(k, n, 2.05);
+  k.begin_frame(true);
+  const TangentSystem::SolveStats drifted = k.solve(b.data(), x.data(), 1e-10, false);
+  EXPECT_FALSE(drifted.refactored);
+  EXPECT_GT(drifted.iterations, k.refactor_after_iterations);
+  EXPECT_LT(relative_residual(k, b, x), 1e-10);
+  EXPECT_TRUE(k.background_under_way());
+  ASSERT_EQ(k.swap_after_frames, 3);
+  for (int frame = 1; frame < 3; ++frame) {
+    k.begin_frame(true);
+    EXPECT_EQ(k.factorisations(), 1) << "taken up early, frame " << frame;
+    EXPECT_TRUE(k.background_under_way());
+  }
+  k.begin_frame(true);
+  EXPECT_EQ(k.factorisations(), 2);
+  EXPECT_EQ(k.background_factorisations(), 1);
+  EXPECT_FALSE(k.background_under_way());
+  const TangentSystem::SolveStats fresh = k.solve(b.data(), x.data(), 1e-10, true);
+  EXPECT_FALSE(fresh.refactored);
+  EXPECT_LE(fresh.iterations, 1);
+  EXPECT_LT(relative_residual(k, b, x), 1e-10);
+}
+
 // The blocked product against the closed form: (K x)_i = d x_i - x_{i-1} - x_{i+1} for every
 // vector of a block, whatever the block's size (passes of 4, 3, 2 and 1 vectors).
 TEST(TangentSystem, BlockedProductMatchesTheStencil) {
