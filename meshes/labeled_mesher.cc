@@ -4,6 +4,7 @@
 
 #include "imaging/separable_filter.h"
 #include "meshes/interface_quality.h"
+#include "meshes/label_fields.h"
 
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
 #include <CGAL/Image_3.h>
@@ -49,47 +50,6 @@ constexpr int kPad = 4;  // background voxels around the map, so that every regi
 constexpr double kFacetRadiusPerEdge = 1.3 / 1.7320508075688772;
 constexpr double kCellRadiusPerEdge = 1.3 * 0.6123724356957945;
 
-// A scalar field on the padded grid, x fastest, looked up trilinearly at a point of the grid's
-// frame (millimetres from the first padded voxel's centre along the index axes).
-struct GridField {
-  std::array<int, 3> n{};
-  std::array<double, 3> h{};
-  std::vector<float> v;
-  float at(long i, long j, long k) const { return v[std::size_t((k * n[1] + j) * n[0] + i)]; }
-  // The 8 voxels around a point and their trilinear weights (the same for every field of a grid).
-  struct Stencil {
-    std::array<std::size_t, 8> index;
-    std::array<double, 8> weight;
-  };
-  Stencil stencil(double x, double y, double z) const {
-    const double t[3] = {x / h[0], y / h[1], z / h[2]};
-    long i0[3];
-    double f[3];
-    for (int c = 0; c < 3; ++c) {
-      const double clamped = std::clamp(t[c], 0.0, double(n[c] - 1) - 1e-9);
-      i0[c] = static_cast<long>(clamped);
-      f[c] = clamped - double(i0[c]);
-    }
-    Stencil s{};
-    int corner = 0;
-    for (int dk = 0; dk < 2; ++dk)
-      for (int dj = 0; dj < 2; ++dj)
-        for (int di = 0; di < 2; ++di, ++corner) {
-          const long i = std::min<long>(i0[0] + di, n[0] - 1), j = std::min<long>(i0[1] + dj, n[1] - 1),
-                     k = std::min<long>(i0[2] + dk, n[2] - 1);
-          s.index[std::size_t(corner)] = std::size_t((k * n[1] + j) * n[0] + i);
-          s.weight[std::size_t(corner)] = (di ? f[0] : 1 - f[0]) * (dj ? f[1] : 1 - f[1]) * (dk ? f[2] : 1 - f[2]);
-        }
-    return s;
-  }
-  double at(const Stencil& s) const {
-    double sum = 0;
-    for (std::size_t c = 0; c < 8; ++c) sum += s.weight[c] * v[s.index[c]];
-    return sum;
-  }
-  double operator()(double x, double y, double z) const { return at(stencil(x, y, z)); }
-};
-
 // Each region's indicator may be raised by a bias (a level offset), which moves its surfaces out
 // by about bias / (the indicators' difference's slope there): the second mesh's regions are given
 // the volume their voxels have, where the blur and the triangles' chords take a little off a small
@@ -117,33 +77,6 @@ struct SizeAt {
     return radius_per_edge * (*size)(p.x(), p.y(), p.z());
   }
 };
-
-// s = min(s, s(neighbour) + grading * distance) over the 26 neighbours, by a forward and a backward
-// raster sweep (a chamfer distance transform with the sizes as its sources).
-void grade(GridField& s, double grading) {
-  const auto& n = s.n;
-  const auto sweep = [&](int sign) {
-    const long nx = n[0], ny = n[1], nz = n[2];
-    for (long kk = 0; kk < nz; ++kk)
-      for (long jj = 0; jj < ny; ++jj)
-        for (long ii = 0; ii < nx; ++ii) {
-          const long i = sign > 0 ? ii : nx - 1 - ii, j = sign > 0 ? jj : ny - 1 - jj, k = sign > 0 ? kk : nz - 1 - kk;
-          float& here = s.v[std::size_t((k * ny + j) * nx + i)];
-          // The neighbours already swept: the 13 before this voxel in raster order (mirrored going back).
-          for (int dk = -1; dk <= 0; ++dk)
-            for (int dj = -1; dj <= 1; ++dj)
-              for (int di = -1; di <= 1; ++di) {
-                if (dk == 0 && (dj > 0 || (dj == 0 && di >= 0))) continue;
-                const long a = i + sign * di, b = j + sign * dj, c = k + sign * dk;
-                if (a < 0 || b < 0 || c < 0 || a >= nx || b >= ny || c >= nz) continue;
-                const double d = std::sqrt(di * di * s.h[0] * s.h[0] + dj * dj * s.h[1] * s.h[1] + dk * dk * s.h[2] * s.h[2]);
-                here = std::min(here, static_cast<float>(s.at(a, b, c) + grading * d));
-              }
-        }
-  };
-  sweep(+1);
-  sweep(-1);
-}
 
 // The curves along which three or more subdomains meet (the background counted), as the edges of
 // a first mesh show them: chained into polylines (closed where they loop), split where more than
@@ -405,33 +338,12 @@ VolumeMesh mesh_labels(const MaskVolume& labels, const std::vector<MeshRegion>& 
         junctions = junction_curves(complex);
         continue;
       }
-      // The biases that give every region its voxels' volume, to first order: a surface between
-      // regions r and q moves by (b_r - b_q) / slope, so region r gains sum_q A_rq (b_r - b_q) / slope:
-      // a graph Laplacian over the regions (the background's bias held at 0), solved by elimination.
+      // The biases that give every region its voxels' volume (meshes/label_fields.h).
       const RegionMeasure m = measure_regions(complex, fields);
-      const std::size_t R = fields - 1;
-      std::vector<double> L(R * R, 0.0), rhs(R, 0.0);
-      for (const auto& [pair, a] : m.between) {
-        const auto [r, q] = pair;
-        if (r > 0) L[(r - 1) * R + (r - 1)] += a;
-        if (q > 0) L[(q - 1) * R + (q - 1)] += a;
-        if (r > 0 && q > 0) L[(r - 1) * R + (q - 1)] -= a, L[(q - 1) * R + (r - 1)] -= a;
-      }
-      for (std::size_t r = 0; r < R; ++r) {
-        rhs[r] = voxels[r + 1] > 0 ? (double(voxels[r + 1]) * voxel_mm3 - m.volume[r + 1]) * slope : 0;
-        if (L[r * R + r] <= 0) L[r * R + r] = 1, rhs[r] = 0;  // a region without a surface keeps its bias
-      }
-      for (std::size_t k = 0; k < R; ++k)  // symmetric positive definite: no pivoting
-        for (std::size_t i = k + 1; i < R; ++i) {
-          const double f = L[i * R + k] / L[k * R + k];
-          for (std::size_t j = k; j < R; ++j) L[i * R + j] -= f * L[k * R + j];
-          rhs[i] -= f * rhs[k];
-        }
-      for (std::size_t k = R; k-- > 0;) {
-        double x = rhs[k];
-        for (std::size_t j = k + 1; j < R; ++j) x -= L[k * R + j] * bias[j + 1];
-        bias[k + 1] = std::clamp(x / L[k * R + k], -0.25, 0.25);
-      }
+      std::vector<double> missing(fields, 0.0);  // each region's voxels' volume less its mesh's, mm^3
+      for (std::size_t r = 1; r < fields; ++r)
+        missing[r] = voxels[r] > 0 ? double(voxels[r]) * voxel_mm3 - m.volume[r] : 0;
+      bias = volume_biases(m.between, missing, slope, bias);
       region_of = RegionOf{indicators, bias};
       step("Delaunay refinement along the junctions", 0.1 + 0.2 * (pass + 1));
     }
