@@ -293,6 +293,12 @@ VolumeMesh mesh_labels(const MaskVolume& labels, const std::vector<MeshRegion>& 
   const Criteria criteria(params::edge_size = SizeAt{size, 1.0}, params::facet_angle = 25,
                           params::facet_size = SizeAt{size, kFacetRadiusPerEdge}, params::facet_distance = distance_at,
                           params::cell_radius_edge_ratio = 3, params::cell_size = SizeAt{size, kCellRadiusPerEdge});
+  // The same for every seed: the blurred step's slope (for the volume biases), the fields, a voxel.
+  const double sigma_mm = s.label_smoothing_voxels * *std::max_element(labels.spacing_mm.begin(), labels.spacing_mm.end());
+  // Across a blurred step two indicators part with slope 2 / (sigma sqrt(2 pi)) per mm.
+  const double slope = sigma_mm > 0 ? 2 / (sigma_mm * std::sqrt(2 * M_PI)) : 1;
+  const std::size_t fields = indicators->size();
+  const double voxel_mm3 = labels.spacing_mm[0] * labels.spacing_mm[1] * labels.spacing_mm[2];
   // One mesh from a seed of CGAL's generator (where refinement places its first points). Whether
   // perturbation, exudation and the repair reach the angle asked hangs on the mesh: on the default
   // anatomy seeds 1 to 9 reach 10.1 to 10.6 degrees but three fall short (6.2, 9.4 and 8.0), and a
@@ -304,18 +310,13 @@ VolumeMesh mesh_labels(const MaskVolume& labels, const std::vector<MeshRegion>& 
       report(seed == 1 ? what : what + " (seed " + std::to_string(seed) + ")", fraction);
     };
     std::function<int(const Kernel::Point_3&)> region_of = RegionOf{indicators, {}};
-    const double sigma_mm = s.label_smoothing_voxels * *std::max_element(labels.spacing_mm.begin(), labels.spacing_mm.end());
-    // Across a blurred step two indicators part with slope 2 / (sigma sqrt(2 pi)) per mm.
-    const double slope = sigma_mm > 0 ? 2 / (sigma_mm * std::sqrt(2 * M_PI)) : 1;
     // A first mesh finds where the regions meet; the later ones keep those curves (each surface then
     // ends on a smooth curve instead of a ragged chain of whatever edges reached it). Each mesh's
     // region volumes correct the regions' biases for the next: a first step from the blurred
     // step's slope, then a secant step on what the first changed.
     std::vector<Polyline> junctions;
     Complex complex;
-    const std::size_t fields = indicators->size();
     std::vector<double> bias(fields, 0.0);
-    const double voxel_mm3 = labels.spacing_mm[0] * labels.spacing_mm[1] * labels.spacing_mm[2];
     constexpr int passes = 3;
     for (int pass = 0; pass < passes; ++pass) {
       CGAL::get_default_random() = CGAL::Random(seed);
