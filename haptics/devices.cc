@@ -212,6 +212,8 @@ void check_hand(const HandParameters& hand) {
     throw std::invalid_argument("operator: a stylus hand's handle mass and arm stiffness must be positive and its arm damping not negative");
 }
 
+}  // namespace
+
 // ZOH discretisation of the hand for the state (x_d, v_d, x_h, v_h) and the inputs (F, x_t, v_t),
 // with the grip (one_mass: the hand's spring and damper, x_h and v_h idle; stylus: k1, b1)
 // multiplied by `grip`: exp of the 7 x 7 augmented matrix [A B; 0 0] T.
@@ -236,8 +238,6 @@ void hand_transition(const HandParameters& hand, double grip, double period_s, E
   phi = e.topLeftCorner<4, 4>();
   gamma = e.topRightCorner<4, 3>();
 }
-
-}  // namespace
 
 namespace {
 

@@ -114,6 +114,15 @@ struct HandParameters {
 HandParameters stylus_hand();
 const char* to_string(HandModelKind model);
 
+// The hand over one tick of `period_s` with its grip (one_mass: the hand's spring and damper;
+// stylus: k1 and b1) multiplied by `grip`, for the state (x_d, v_d, x_h, v_h) of one axis and the
+// inputs (F, x_t, v_t) held over the tick (the device holds its force: zero-order hold): exp(A T)
+// and int_0^T exp(A s) ds B, exactly. one_mass: x_h and v_h take no part (their rows are the
+// identity and nothing else reads them). The operator device steps with it, and so does the lifting
+// of the loop with the hand in it (stability_analysis.h).
+void hand_transition(const HandParameters& hand, double grip, double period_s, Eigen::Matrix4d& phi,
+                     Eigen::Matrix<double, 4, 3>& gamma);
+
 // What an operator may do that tries the loop (passivity-and-identification.md, docs/devices.md):
 //   - release at t: the hand's spring and damper (a stylus: the grip's, k1 and b1) drop to zero in
 //     one tick; only the mass (a stylus: the handle's) is left, and nothing pulls it to the target;

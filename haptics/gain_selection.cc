@@ -22,6 +22,7 @@ struct Mode {
 class UncertaintySet {
  public:
   UncertaintySet(const GainProblem& problem, const GainSelectionOptions& options) : problem_(problem) {
+    if (options.hand) hand_ = ScalarHand(*options.hand, options.period_s), with_hand_ = true;
     const Eigen::MatrixXd& k = problem.stiffness;
     const auto m = k.rows();
     if (m == 0 || k.cols() != m) throw std::invalid_argument("gain selection: the stiffness must be square and non-empty");
@@ -45,11 +46,16 @@ class UncertaintySet {
 
   double smallest_stiffness() const { return modes_.front().stiffness; }  // eigenvalues ascend
 
+  bool with_hand() const { return with_hand_; }
+
+  // Which loops a radius covers: the device held still, the design hand's, or both (the larger).
+  enum class Loops { still, hand, both };
+
   // The robust radius: the largest over every (mode, scale). A search only needs to know whether a
   // trial beats the best so far, so the scan stops as soon as one loop exceeds `cutoff`, starting
   // from the (mode, scale) that was worst last time: most rejected trials cost one evaluation.
   double radius(const LocalModelGains& gains, int& evaluations,
-                double cutoff = std::numeric_limits<double>::infinity()) const {
+                double cutoff = std::numeric_limits<double>::infinity(), Loops loops = Loops::both) const {
     ScalarLoop loop;
     loop.local_model = problem_.local_model;
     loop.hold = problem_.hold;
@@ -64,8 +70,9 @@ class UncertaintySet {
       loop.damping = mode.damping;
       loop.compliance = 1.0 / mode.stiffness;
       loop.stiffness = scales_[index % scales_.size()] * mode.stiffness;
-      double r = scalar_spectral_radius(loop);
+      double r = loops == Loops::hand ? 0.0 : scalar_spectral_radius(loop);
       ++evaluations;
+      if (with_hand_ && loops != Loops::still && !(r > cutoff)) r = std::max(r, hand_spectral_radius(loop, hand_));
       if (std::isnan(r)) r = std::numeric_limits<double>::infinity();
       if (r > worst) worst = r, worst_index_ = index;
       if (worst > cutoff) break;
@@ -78,6 +85,8 @@ class UncertaintySet {
   std::vector<Mode> modes_;
   std::vector<double> scales_;
   mutable int worst_index_ = 0;
+  ScalarHand hand_;
+  bool with_hand_ = false;
 };
 
 // P and Smith: the stiffest Kh whose radius is at most the settle radius.
@@ -87,18 +96,26 @@ GainSelection select_proportional(const UncertaintySet& set, const GainProblem& 
   const double lambda = set.smallest_stiffness();
   const double top = has_predictor(problem.local_model) ? 20.0 : 3.0;  // Kh / lambda_min
   constexpr int grid = 24;
+  using Loops = UncertaintySet::Loops;
+  // Accepted: the radius without the hand at most settle_radius, and with the design hand (if any)
+  // at most hand_settle_radius.
+  const auto accept = [&](double kh) {
+    if (set.radius({kh, 0}, best.evaluations, options.settle_radius, Loops::still) > options.settle_radius) return false;
+    return !set.with_hand() ||
+           set.radius({kh, 0}, best.evaluations, options.hand_settle_radius, Loops::hand) <= options.hand_settle_radius;
+  };
   double best_radius = std::numeric_limits<double>::infinity(), best_kh = 0;
   double accepted = -1, rejected_above = -1;
   // Log-spaced from 0.01 lambda_min to `top` lambda_min, scanned downwards: the first accepted
   // gain is the stiffest on the grid.
   for (int g = grid - 1; g >= 0; --g) {
     const double kh = lambda * 0.01 * std::pow(top / 0.01, static_cast<double>(g) / (grid - 1));
-    const double r = set.radius({kh, 0}, best.evaluations, std::max(options.settle_radius, best_radius));
-    if (r < best_radius) best_radius = r, best_kh = kh;
-    if (r <= options.settle_radius) {
+    if (accept(kh)) {
       accepted = kh;
       break;
     }
+    const double r = set.radius({kh, 0}, best.evaluations, best_radius);
+    if (r < best_radius) best_radius = r, best_kh = kh;
     rejected_above = kh;
   }
   if (accepted > 0) {
@@ -106,7 +123,7 @@ GainSelection select_proportional(const UncertaintySet& set, const GainProblem& 
     if (high > 0)
       for (int it = 0; it < 12; ++it) {  // bisect the crossing to 0.1 % or so
         const double mid = std::sqrt(low * high);
-        (set.radius({mid, 0}, best.evaluations, options.settle_radius) <= options.settle_radius ? low : high) = mid;
+        (accept(mid) ? low : high) = mid;
       }
     best.gains = {low, 0};
   } else {
@@ -173,8 +190,12 @@ GainSelection select_gains(const GainProblem& problem, const GainSelectionOption
                            const LocalModelGains* start) {
   if (problem.ratio < 1) throw std::invalid_argument("gain selection: the ratio N must be at least 1");
   const UncertaintySet set(problem, options);
-  return has_integrator(problem.local_model) ? select_integral(set, problem, start)
-                                             : select_proportional(set, problem, options);
+  GainSelection selection = has_integrator(problem.local_model) ? select_integral(set, problem, start)
+                                                                : select_proportional(set, problem, options);
+  if (set.with_hand())
+    selection.hand_spectral_radius = set.radius(selection.gains, selection.evaluations,
+                                                std::numeric_limits<double>::infinity(), UncertaintySet::Loops::hand);
+  return selection;
 }
 
 double robust_spectral_radius(const GainProblem& problem, const LocalModelGains& gains,

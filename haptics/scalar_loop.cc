@@ -189,6 +189,50 @@ double recurrence_spectral_radius(const ScalarLoop& p) {
   return general;
 }
 
+ScalarHand::ScalarHand(const HandParameters& hand, double period_s)
+    : rows(hand.model == HandModelKind::one_mass ? 2 : 4) {
+  Eigen::Matrix<double, 4, 3> gamma;
+  hand_transition(hand, 1.0, period_s, phi, gamma);
+  force = gamma.col(0);
+}
+
+double hand_spectral_radius(const ScalarLoop& p, const ScalarHand& hand) {
+  using Matrix = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, 9, 9>;
+  const bool integrator = has_integrator(p.local_model), predictor = has_predictor(p.local_model);
+  const bool zoh = p.hold == HoldKind::zoh;
+  const double kh = p.gains.proportional, w = predictor ? p.compliance : 0.0;
+  const int loop_size = integrator ? 5 : 4, n = loop_size + hand.rows;
+  Matrix phi(n, n);
+  for (int a = 0; a < n; ++a) {
+    double x[9] = {0, 0, 0, 0, 0, 0, 0, 0, 0};
+    x[a < loop_size ? a : 5 + (a - loop_size)] = 1;
+    const double ps = x[0], h = x[1], pf = x[2], f = x[3];
+    double s = x[4];
+    Eigen::Vector4d state(x[5], x[6], x[7], x[8]);
+    double pending_surface = 0, pending_force = 0;
+    // The promotion at the frame's first tick: (ps, pf) become the newest, (h, f) the previous.
+    for (int i = 0; i < p.ratio; ++i) {
+      const double t = zoh ? 1.0 : static_cast<double>(i) / p.ratio;
+      const double held = h + t * (ps - h), reference = f + t * (pf - f);
+      const double e = state(0) - held;
+      double force, error = e;
+      if (predictor) {
+        force = (kh * (e + w * reference) + (integrator ? s : 0.0)) / (1 + kh * w);
+        error = e - w * (force - reference);
+      } else {
+        force = kh * e + (integrator ? s : 0.0);
+      }
+      if (integrator) s += p.gains.integral * error;
+      if (i == 0) pending_force = force, pending_surface = (force + p.damping * ps) / (p.stiffness + p.damping);
+      state = hand.phi * state - hand.force * force;
+    }
+    const double y[9] = {pending_surface, ps, pending_force, pf, s, state(0), state(1), state(2), state(3)};
+    for (int b = 0; b < n; ++b) phi(b, a) = y[b < loop_size ? b : 5 + (b - loop_size)];
+  }
+  Eigen::EigenSolver<Matrix> eigen(phi, /*computeEigenvectors=*/false);
+  return eigen.eigenvalues().cwiseAbs().maxCoeff();
+}
+
 double scalar_spectral_radius(const ScalarLoop& p) {
   double c[4];
   switch (closed_form_coefficients(p.local_model, p.hold, p.ratio, p.stiffness, p.damping, p.gains, c)) {

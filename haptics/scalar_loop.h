@@ -16,6 +16,9 @@
 // polynomials of stability_analysis.h are cheaper still.
 #pragma once
 
+#include <Eigen/Core>
+
+#include "haptics/devices.h"
 #include "haptics/hold.h"
 #include "haptics/local_model.h"
 
@@ -37,6 +40,24 @@ double recurrence_spectral_radius(const ScalarLoop& loop);
 // The same figure by the cheapest exact route: closed-form polynomial roots for P and PI, the
 // recurrence for the Smith variants. No heap allocation.
 double scalar_spectral_radius(const ScalarLoop& loop);
+
+// A hand holding the device (devices.h), stepped over one tick with the force held: the rows of its
+// state (2: x_d, v_d; 4 for the stylus: and x_h, v_h), exp(A T) and the column of the force.
+struct ScalarHand {
+  int rows = 2;
+  Eigen::Matrix4d phi = Eigen::Matrix4d::Identity();
+  Eigen::Vector4d force = Eigen::Vector4d::Zero();
+
+  ScalarHand() = default;
+  ScalarHand(const HandParameters& hand, double period_s);
+};
+
+// The spectral radius of the one-frame map of the loop with the hand in it (stability_analysis.h:
+// the device is the hand's x_d, pushed back by -F each tick), by the tick recurrence above run
+// from each unit state [ps, h, pf, f, s (PI variants), hand]: a second implementation of
+// analyse() with a hand, for the gain selection's inner loop (tests compare the two). No heap
+// allocation.
+double hand_spectral_radius(const ScalarLoop& loop, const ScalarHand& hand);
 
 // max |root| of a3 z^3 + a2 z^2 + a1 z + a0 (a3 != 0), without allocation: one real root by
 // Cardano's formula polished by Newton, then the deflated quadratic.

@@ -67,20 +67,42 @@ MultirateLoop make_loop(const LoopParameters& p) {
   return MultirateLoop(std::move(local), std::move(environment), p.hold, p.ratio);
 }
 
+namespace {
+
+// The rows of the hand's state per contact: one_mass (x_d, v_d), stylus (x_d, v_d, x_h, v_h).
+int hand_rows(const HandParameters& hand) { return hand.model == HandModelKind::one_mass ? 2 : 4; }
+
+}  // namespace
+
 StabilityResult analyse(const LoopParameters& p) {
   const int m = static_cast<int>(p.stiffness.rows());
   MultirateLoop loop = make_loop(p);
 
   const StatePacking packing{m, has_integrator(p.local_model)};
-  const int n = packing.size();
-  const Eigen::VectorXd still = Eigen::VectorXd::Zero(m);
+  const int rows = p.hand ? hand_rows(*p.hand) : 0;
+  const int loop_size = packing.size(), n = loop_size + rows * m;
+  Eigen::Matrix4d phi = Eigen::Matrix4d::Identity();
+  Eigen::Matrix<double, 4, 3> gamma = Eigen::Matrix<double, 4, 3>::Zero();
+  if (p.hand) hand_transition(*p.hand, 1.0, p.period_s, phi, gamma);
+  Eigen::VectorXd device = Eigen::VectorXd::Zero(m);
+  Eigen::Matrix<double, 4, Eigen::Dynamic> hands(4, m);  // per contact: x_d, v_d, x_h, v_h
   StabilityResult result;
   result.monodromy.resize(n, n);
   for (int c = 0; c < n; ++c) {
-    packing.unpack(Eigen::VectorXd::Unit(n, c), loop);
+    const Eigen::VectorXd unit = Eigen::VectorXd::Unit(n, c);
+    packing.unpack(unit.head(loop_size), loop);
+    hands.setZero();
+    for (int k = 0; k < m; ++k) hands.col(k).head(rows) = unit.segment(loop_size + rows * k, rows);
     loop.state().tick = p.ratio;  // a frame boundary after the first frame
-    for (int i = 0; i < p.ratio; ++i) loop.tick(still);
-    result.monodromy.col(c) = packing.pack(loop);
+    for (int i = 0; i < p.ratio; ++i) {
+      device = hands.row(0).transpose();  // still (zero) without a hand
+      const Eigen::VectorXd& force = loop.tick(device);
+      // The rendered force pushes the device back out of the tissue: -F along the penetration.
+      if (p.hand)
+        for (int k = 0; k < m; ++k) hands.col(k) = phi * hands.col(k) - gamma.col(0) * force(k);
+    }
+    result.monodromy.col(c).head(loop_size) = packing.pack(loop);
+    for (int k = 0; k < m; ++k) result.monodromy.col(c).segment(loop_size + rows * k, rows) = hands.col(k).head(rows);
   }
 
   Eigen::EigenSolver<Eigen::MatrixXd> eigen(result.monodromy, /*computeEigenvectors=*/false);

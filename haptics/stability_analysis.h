@@ -8,6 +8,15 @@
 //   X = [x_o(j-1), x_o(j-2), F((j-1)N), F((j-2)N), s(jN)]      (s only for the PI variants),
 // of which x_o(j-2) and the forces are pure delays for some variants: they add zero poles only.
 //
+// With a hand (LoopParameters::hand), the device is no longer held still: every contact's device
+// is held by its own copy of the hand model (devices.h: one mass on the grip's spring and damper,
+// or the two-stage stylus), linearised about the contact's operating point (the target still, the
+// contact never lost), pushed back by the force the loop renders and stepped exactly over each
+// tick with that force held (the operator device's own transition, hand_transition). The hand's
+// state (x_d, v_d, and x_h, v_h for the stylus, per contact) joins X, so the verdict covers the
+// loop that a hand closes: the proof without the hand says nothing about a light, stiff, barely
+// damped grip on a stiff tissue (Colgate: a sampled stiffness K is passive only for K < 2 b / T).
+//
 // Cross-checks with closed forms (ARCHITECTURE.md section 3), scalar K0, B0:
 //   P,  ZOH:  (K0+B0) z + (Kh - B0)
 //   P,  FOH:  (K0+B0) z^2 - B0 z + Kh
@@ -20,8 +29,10 @@
 #include <Eigen/Dense>
 
 #include <complex>
+#include <optional>
 #include <vector>
 
+#include "haptics/devices.h"
 #include "haptics/hold.h"
 #include "haptics/local_model.h"
 #include "haptics/multirate_loop.h"
@@ -36,6 +47,10 @@ struct LoopParameters {
   Eigen::MatrixXd damping;         // B0, m x m
   LocalModelGains gains;           // Kh, I
   Eigen::MatrixXd compliance;      // W for the Smith variants; empty: K0^-1
+  // The hand holding each contact's device, or none (the device held still: the proof without the
+  // hand); period_s is T, which the hand's dynamics need.
+  std::optional<HandParameters> hand;
+  double period_s = 1e-3;
 
   static LoopParameters scalar(LocalModelKind kind, HoldKind hold, int ratio, double k0, double b0,
                                double kh, double integral = 0);
