@@ -18,6 +18,14 @@ haptics::HapticLoopSettings loop_settings(const config::Scene& scene) {
   s.coupling = h.coupling;
   s.gains = {h.proportional_n_per_m, h.integral_n_per_m};
   s.selection.margin = h.robustness_margin;
+  s.selection.period_s = s.period_s;
+  if (h.design_hand.enabled) {
+    haptics::HandParameters hand;
+    hand.mass_kg = h.design_hand.mass_kg;
+    hand.stiffness_n_per_m = h.design_hand.stiffness_n_per_m;
+    hand.damping_n_s_per_m = h.design_hand.damping_n_s_per_m;
+    s.selection.hand = hand;
+  }
   s.safety.max_force_n = h.max_force_n;
   s.safety.max_force_rate_n_per_s = h.max_force_rate_n_per_s;
   s.safety.period_s = s.period_s;

@@ -239,6 +239,14 @@ struct Haptics {
   bool coupling = true;
   Passivity passivity;
   Identification identification;
+  // A hand the automatic gains must also be stable with (haptics/gain_selection.h): one mass on a
+  // spring and a damper to a still target; keys left out take the default hand's (docs/devices.md).
+  // Off by default (`design_hand: none`): the proof holds the device still, and the passivity layer
+  // answers for the hand (docs/stability.md, section 6, says why it is not on).
+  struct DesignHand {
+    bool enabled = false;
+    double mass_kg = 0.3, stiffness_n_per_m = 300, damping_n_s_per_m = 8;
+  } design_hand;
 
   // Ticks per solver frame, N; valid once the scene has been validated.
   int ratio(const Solver& solver) const;

@@ -47,6 +47,28 @@ void read_identification(MapView& haptics, Identification& out) {
   map.number("forgetting", out.forgetting, {0.5, 1, true, false, "over 0.5, up to 1"});
   map.number("bound", out.bound, {0, 10, true, false, "over 0, up to 10 (a share: 0.25 is 25 %)"});
 }
+// haptics.design_hand: `none`, or {mass_kg, stiffness_n_per_m, damping_n_s_per_m} (each defaults
+// to the project's default hand).
+void read_design_hand(MapView& haptics, Haptics::DesignHand& out) {
+  const Entry e = haptics.entry("design_hand");
+  Reader& reader = haptics.reader();
+  if (e.value.IsScalar()) {
+    if (e.value.Scalar() == "none")
+      out.enabled = false;
+    else
+      reader.error(e.value_mark, e.path,
+                   "expected 'none' or a mapping {mass_kg: ..., stiffness_n_per_m: ..., damping_n_s_per_m: ...}, got " +
+                       detail::describe_node(e.value));
+    return;
+  }
+  MapView map(reader, e.value, e.path, e.key_mark, {"mass_kg", "stiffness_n_per_m", "damping_n_s_per_m"});
+  if (!map.valid()) return;
+  out.enabled = true;
+  map.number("mass_kg", out.mass_kg, plausible::hand_mass_kg);
+  map.number("stiffness_n_per_m", out.stiffness_n_per_m, plausible::hand_stiffness_n_per_m);
+  map.number("damping_n_s_per_m", out.damping_n_s_per_m, plausible::hand_damping_n_s_per_m);
+}
+
 const Choices<DeviceType> kDevices{{"replay", DeviceType::replay},
                                    {"operator", DeviceType::operator_model},
                                    {"phantom", DeviceType::phantom},
@@ -98,8 +120,10 @@ void read_haptics(MapView& scene, Haptics& out) {
   Reader& reader = scene.reader();
   MapView map(reader, e.value, e.path, e.key_mark,
               {"rate_hz", "local_model", "hold", "gains", "robustness_margin", "max_force_n",
-               "max_force_rate_n_per_s", "watchdog_timeout_s", "coupling", "passivity", "identification"});
+               "max_force_rate_n_per_s", "watchdog_timeout_s", "coupling", "passivity", "identification",
+               "design_hand"});
   if (!map.valid()) return;
+  if (map.has("design_hand")) read_design_hand(map, out.design_hand);
   if (map.has("passivity")) read_passivity(map, out.passivity);
   if (map.has("identification")) read_identification(map, out.identification);
   map.boolean("coupling", out.coupling);

@@ -395,8 +395,13 @@ int run_replay(const ReplayOptions& o) {
     std::printf("%ld ticks (%.2f s simulated), %ld frames in %.1f s; solve p50 %.1f ms, p99 %.1f ms, max %.1f ms\n",
                 summary.ticks, summary.ticks / scene.haptics.rate_hz,
                 summary.frames, session_seconds, 1e3 * summary.solve_p50_s, 1e3 * summary.solve_p99_s, 1e3 * summary.solve_max_s);
-    std::printf("  max force %.3f N, smallest stability margin %.3f, %ld Newton failures%s\n", summary.max_force_n,
-                summary.min_stability_margin, summary.newton_failures,
+    const config::Haptics::DesignHand& hand = scene.haptics.design_hand;
+    char with_hand[120] = " (the device held still)";
+    if (hand.enabled)
+      std::snprintf(with_hand, sizeof with_hand, " (with the design hand: %.3g kg, %.4g N/m, %.3g N s/m)", hand.mass_kg,
+                    hand.stiffness_n_per_m, hand.damping_n_s_per_m);
+    std::printf("  max force %.3f N, smallest stability margin %.3f%s, %ld Newton failures%s\n", summary.max_force_n,
+                summary.min_stability_margin, with_hand, summary.newton_failures,
                 summary.first_failure.empty() ? "" : (" (the first " + summary.first_failure + "; each rolled back, the last good answer held)").c_str());
     if (o.clock == "realtime") {
       const TimingSummary& t = summary.timing;

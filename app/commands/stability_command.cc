@@ -10,6 +10,7 @@
 #include <iomanip>
 #include <iostream>
 #include <memory>
+#include <optional>
 #include <sstream>
 
 #include "app/chart_png.h"
@@ -38,6 +39,7 @@ struct StabilityOptions {
   std::string region, volume, step;      // output paths (stem; .csv and .png are written)
   std::vector<double> kh_range, ni_range, k0_values{0.5, 1.0, 2.0};
   int points = 101;
+  std::vector<double> hand;  // --hand MASS STIFFNESS DAMPING (SI), or none
 };
 
 namespace fs = std::filesystem;
@@ -307,12 +309,28 @@ int run_stability(const StabilityOptions& o) {
     if (o.step.empty()) return kExitOk;
   }
   const StabilityResult result = analyse(p);
+  // The loop with a hand holding the device (SI: K0 and Kh in N/m, T from --rate-hz).
+  std::optional<StabilityResult> with_hand;
+  if (o.hand.size() == 3) {
+    auto held = p;
+    HandParameters hand;
+    hand.mass_kg = o.hand[0], hand.stiffness_n_per_m = o.hand[1], hand.damping_n_s_per_m = o.hand[2];
+    if (!(hand.mass_kg > 0) || !(hand.stiffness_n_per_m > 0) || !(hand.damping_n_s_per_m >= 0) || !held.stiffness.allFinite()) {
+      std::cerr << "error: --hand: the mass and stiffness must be positive and the damping not negative, not " << o.hand[0]
+                << " " << o.hand[1] << " " << o.hand[2] << "\n";
+      return kExitBadInput;
+    }
+    held.hand = hand;
+    held.period_s = 1.0 / o.rate_hz;
+    with_hand = analyse(held);
+  }
   std::vector<std::complex<double>> poles;  // the dynamic ones; zeros are pure delays
   for (const auto& z : result.poles)
     if (std::abs(z) > 1e-4) poles.push_back(z);  // defective zeros come out at ~eps^(1/k)
   const double period = 1.0 / o.rate_hz;
   const StepResponse step = simulate_step(p, period, o.duration_s);
   const bool stable = result.stable();
+  const bool stable_with_hand = !with_hand || with_hand->stable();
   if (!o.step.empty()) {
     try {
       write_step(o, step);
@@ -334,6 +352,11 @@ int run_stability(const StabilityOptions& o) {
     json.key("ni").value(o.ni);
     json.key("spectral_radius").value(result.spectral_radius);
     json.key("stable").value(stable);
+    if (with_hand) {
+      json.key("hand").begin_array().value(o.hand[0]).value(o.hand[1]).value(o.hand[2]).end_array();
+      json.key("spectral_radius_with_hand").value(with_hand->spectral_radius);
+      json.key("stable_with_hand").value(with_hand->stable());
+    }
     json.key("poles").begin_array();
     for (const auto& z : poles) json.begin_array().value(z.real()).value(z.imag()).end_array();
     json.end_array();
@@ -361,8 +384,12 @@ int run_stability(const StabilityOptions& o) {
     };
     std::cout << "\n  2 % settling     force " << settle(step.force_settling_s) << ", surface "
               << settle(step.surface_settling_s) << "\n";
+    if (with_hand)
+      std::cout << "  with the hand    " << o.hand[0] << " kg, " << o.hand[1] << " N/m, " << o.hand[2]
+                << " N s/m: spectral radius " << with_hand->spectral_radius
+                << (with_hand->stable() ? "  (stable)" : "  (UNSTABLE: the loop with this hand in it rings)") << "\n";
   }
-  return stable ? kExitOk : kExitFailure;
+  return stable && stable_with_hand ? kExitOk : kExitFailure;
 }
 
 }  // namespace
@@ -382,7 +409,9 @@ void add_stability_command(CLI::App& parent, int& exit_code) {
       "display: run under xvfb-run -a on a headless machine. With --region or --volume alone the\n"
       "exit code says whether the files were written.\n"
       "Examples: fetouch stability --local-model p --k0 0.2 --kh 0.19   (rings: pole -0.95)\n"
-      "          xvfb-run -a fetouch stability --local-model pi --hold foh --region out/pi_foh");
+      "          xvfb-run -a fetouch stability --local-model pi --hold foh --region out/pi_foh\n"
+      "          fetouch stability --local-model pi --hold foh --k0 23840 --kh 5235 --ni 7915 --hand 0.3 300 8\n"
+      "            (the 1 MPa block's gains proven without the hand: stable, and UNSTABLE with it)");
   cmd->add_option("--local-model", o->local_model, "p, pi, smith or pi_smith")
       ->check(CLI::IsMember({"p", "pi", "smith", "pi_smith"}))
       ->capture_default_str();
@@ -398,6 +427,10 @@ void add_stability_command(CLI::App& parent, int& exit_code) {
   cmd->add_option("--duration", o->duration_s, "Simulated time of the step response, s")
       ->check(CLI::Range(1e-6, 3600.0))->capture_default_str();
   cmd->add_flag("--json", o->json, "Print a JSON report");
+  cmd->add_option("--hand", o->hand,
+                  "Also analyse the loop with a one-mass hand holding the device: MASS (kg) STIFFNESS (N/m) DAMPING "
+                  "(N s/m); K0 and Kh are then in N/m and T is 1 / --rate-hz")
+      ->expected(3);
   cmd->add_option("--region", o->region, "Write the stability region over (Kh, N*I) to STEM.csv and STEM.png");
   cmd->add_option("--volume", o->volume, "Write the stability volume over K0 to STEM.csv and STEM.png");
   cmd->add_option("--step", o->step, "Write the step response to STEM.csv and STEM.png");

@@ -103,8 +103,23 @@ TEST(SceneLoader, DefaultsForOptionalSections) {
   EXPECT_DOUBLE_EQ(s.solver.rate_hz, 20);
   EXPECT_DOUBLE_EQ(s.haptics.rate_hz, 1000);
   EXPECT_DOUBLE_EQ(s.haptics.robustness_margin, 0.3);
+  EXPECT_FALSE(s.haptics.design_hand.enabled);  // the proof holds the device still
   EXPECT_DOUBLE_EQ(s.material.density_kg_per_m3, 1000);
   EXPECT_TRUE(s.probes.empty());
+}
+
+TEST(SceneLoader, DesignHandIsOffUnlessGivenAndItsMissingKeysAreTheDefaultHands) {
+  const std::string body =
+      "mesh: {generate: {shape: ball, radius_m: 0.04}}\n"
+      "material: {model: linear_elastic, youngs_modulus_pa: 3000, poisson_ratio: 0.3}\n";
+  EXPECT_FALSE(parse_scene(body + "haptics: {design_hand: none}\n", "inline", kData).scene.haptics.design_hand.enabled);
+  EXPECT_TRUE(parse_scene(body + "haptics: {design_hand: {}}\n", "inline", kData).scene.haptics.design_hand.enabled);
+  const auto given = parse_scene(body + "haptics: {design_hand: {mass_kg: 0.1, damping_n_s_per_m: 2}}\n", "inline", kData);
+  const auto& hand = given.scene.haptics.design_hand;
+  EXPECT_TRUE(hand.enabled);
+  EXPECT_DOUBLE_EQ(hand.mass_kg, 0.1);
+  EXPECT_DOUBLE_EQ(hand.stiffness_n_per_m, 300);
+  EXPECT_DOUBLE_EQ(hand.damping_n_s_per_m, 2);
 }
 
 TEST(SceneLoader, ReportsEveryErrorOfAFileAtOnce) {
