@@ -27,6 +27,26 @@ TEST(StabilityCommand, RingingSettlesSlowlyAndDivergenceExitsOne) {
   EXPECT_NE(diverge.out.find("UNSTABLE"), std::string::npos);
 }
 
+// --hand against Colgate's bound: one tick a frame (-N 1), a tissue whose surface does not move, a
+// P wall against a 1 kg hand with 5 N s/m: stable at 95 % of 2 b / T = 10,000 N/m, not at 105 %,
+// while the loop without the hand (the device held still) is stable at both.
+TEST(StabilityCommand, WithAHandItReproducesColgatesBound) {
+  const auto below = run_command(fetouch("stability --json --local-model p -N 1 --k0 1e12 --kh 9500 --hand 1 0.001 5"));
+  ASSERT_EQ(below.exit_code, 0) << below.err;
+  const YAML::Node b = YAML::Load(below.out);
+  EXPECT_TRUE(b["stable"].as<bool>());
+  EXPECT_TRUE(b["stable_with_hand"].as<bool>());
+  EXPECT_LT(b["spectral_radius_with_hand"].as<double>(), 1);
+  const auto above = run_command(fetouch("stability --json --local-model p -N 1 --k0 1e12 --kh 10500 --hand 1 0.001 5"));
+  EXPECT_EQ(above.exit_code, 1);
+  const YAML::Node a = YAML::Load(above.out);
+  EXPECT_TRUE(a["stable"].as<bool>());
+  EXPECT_FALSE(a["stable_with_hand"].as<bool>());
+  const auto text = run_command(fetouch("stability --local-model p -N 1 --k0 1e12 --kh 10500 --hand 1 0.001 5"));
+  EXPECT_NE(text.out.find("the loop with this hand in it rings"), std::string::npos) << text.out;
+  EXPECT_EQ(run_command(fetouch("stability --local-model p --hand 0 300 8")).exit_code, 2);  // no mass
+}
+
 TEST(StabilityCommand, BadInputExitsTwo) {
   EXPECT_EQ(run_command(fetouch("stability --local-model q")).exit_code, 2);
   EXPECT_EQ(run_command(fetouch("stability --k0 -1")).exit_code, 2);
