@@ -113,6 +113,12 @@ class SessionBase {
     summary_.newton_failures += !f.converged;
     summary_.min_stability_margin = std::min(summary_.min_stability_margin, f.stability_margin);
     summary_.frames_with_unstable_gains += !(f.stability_margin > 0);  // radius >= 1: not robustly stable
+    const auto largest = [](const std::vector<double>& v) { return v.empty() ? -1.0 : *std::max_element(v.begin(), v.end()); };
+    if (largest(f.stiffness_eigenvalues) > largest(summary_.stiffest_eigenvalues)) {
+      summary_.stiffest_eigenvalues = f.stiffness_eigenvalues;
+      summary_.stiffest_proportional_gain = f.proportional_gain, summary_.stiffest_integral_gain = f.integral_gain;
+      summary_.stiffest_local_model = f.local_model, summary_.stiffest_hold = f.hold;
+    }
     ++summary_.frames;
     if (writer_) writer_->append(f);
   }

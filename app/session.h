@@ -137,6 +137,12 @@ struct SessionSummary {
   std::vector<long> recoverable_errors;  // per device: recoverable errors (force errors) seen
   std::vector<PassivitySummary> passivity;  // per device
   std::vector<IdentificationSummary> identification;  // per device
+  // The frame whose condensed stiffness was the largest (its largest eigenvalue), and the gains and
+  // mode it chose: what the lifting with a hand (haptics/stability_analysis.h) is asked about
+  // afterwards. Empty eigenvalues: no frame.
+  std::vector<double> stiffest_eigenvalues;
+  double stiffest_proportional_gain = 0, stiffest_integral_gain = 0;
+  int stiffest_local_model = -1, stiffest_hold = -1;
 };
 
 // Runs until the devices finish (or max_ticks). Allocation happens only outside the tick.

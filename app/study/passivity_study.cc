@@ -26,6 +26,7 @@
 #include "app/session.h"
 #include "app/study/passivity_metrics.h"
 #include "app/study/study.h"
+#include "haptics/stability_analysis.h"
 
 namespace fetouch::app {
 
@@ -45,6 +46,9 @@ struct Run {
   double max_force_n = 0, felt_n_per_m = std::numeric_limits<double>::quiet_NaN();
   long ticks = 0, controller_ticks = 0, adjusting_ticks = 0, generation_events = 0, newton_failures = 0;
   double max_controller_force_n = 0, min_energy_j = 0, min_scale = 1;
+  // The lifting with this run's hand in the loop (haptics/stability_analysis.h), at the stiffness,
+  // gains and mode of the run's stiffest frame: the linear verdict the run is set against.
+  double lifted_radius = std::numeric_limits<double>::quiet_NaN();
   std::string error;            // a run that could not finish
   std::vector<double> force;    // device 0's force magnitude per tick (for the plot)
 };
@@ -126,6 +130,23 @@ Run run_one(const config::Scene& scene, const Hand& hand, const std::string& eve
       if (d == 0) r.felt_n_per_m = felt_stiffness(s.forces[0], s.positions[0]), r.force = std::move(size);
     }
     if (first_forces && !s.forces.empty()) *first_forces = s.forces[0];
+    if (!s.stiffest_eigenvalues.empty() && s.stiffest_local_model >= 0 && s.stiffest_hold >= 0 && !scene.probes.empty()) {
+      haptics::LoopParameters p;
+      p.local_model = static_cast<haptics::LocalModelKind>(s.stiffest_local_model);
+      p.hold = static_cast<haptics::HoldKind>(s.stiffest_hold);
+      p.ratio = loop.ratio;
+      p.gains = {s.stiffest_proportional_gain, s.stiffest_integral_gain};
+      p.hand = hand_parameters(scene.probes.front().device.hand);
+      p.period_s = loop.period_s;
+      double worst = 0;
+      for (double k : s.stiffest_eigenvalues) {  // each mode of the condensed stiffness, a hand on each contact
+        p.stiffness = Eigen::MatrixXd::Constant(1, 1, k);
+        p.damping = Eigen::MatrixXd::Zero(1, 1);
+        p.compliance = Eigen::MatrixXd::Constant(1, 1, 1 / k);
+        worst = std::max(worst, haptics::analyse(p).spectral_radius);
+      }
+      r.lifted_radius = worst;
+    }
     for (const PassivitySummary& p : s.passivity) {
       r.controller_ticks += p.controller_ticks, r.adjusting_ticks += p.adjusting_ticks, r.generation_events += p.generation_events;
       r.max_controller_force_n = std::max(r.max_controller_force_n, p.max_controller_force_n);
@@ -225,9 +246,9 @@ int run_study_passivity(const PassivityOptions& o) {
   // The table: one row a run.
   StudyTable table;
   table.columns = {"mode", "event", "mass_kg", "stiffness_n_per_m", "damping_n_s_per_m", "nominal", "oscillates",
-                   "ringing_s", "ringing_ptp_n", "chatter_ticks", "max_force_n", "felt_stiffness_n_per_m",
+                   "ringing_s", "ringing_ptp_n", "chatter_ticks", "bounces", "max_force_n", "felt_stiffness_n_per_m",
                    "controller_ticks", "controller_share", "adjusting_ticks", "max_controller_force_n", "generation_events",
-                   "min_port_energy_j", "min_scale", "newton_failures", "error"};
+                   "min_port_energy_j", "min_scale", "newton_failures", "lifted_radius_with_hand", "error"};
   std::map<std::string, ModeTotals> totals;
   std::map<std::tuple<std::string, double, double, double>, double> felt_off;  // (event, hand) -> felt, layer off
   for (const Run& r : runs)
@@ -240,11 +261,11 @@ int run_study_passivity(const PassivityOptions& o) {
                           format_number(r.hand.damping_n_s_per_m), r.hand.nominal ? "1" : "0",
                           r.error.empty() ? (r.oscillation.oscillates ? "1" : "0") : "",
                           format_number(r.oscillation.ringing_s), format_number(r.oscillation.ringing_ptp_n),
-                          std::to_string(r.oscillation.chatter_ticks), format_number(r.max_force_n), format_number(r.felt_n_per_m),
+                          std::to_string(r.oscillation.chatter_ticks), std::to_string(r.oscillation.bounces), format_number(r.max_force_n), format_number(r.felt_n_per_m),
                           std::to_string(r.controller_ticks), format_number(share), std::to_string(r.adjusting_ticks),
                           format_number(r.max_controller_force_n),
                           std::to_string(r.generation_events), format_number(r.min_energy_j), format_number(r.min_scale),
-                          std::to_string(r.newton_failures), r.error});
+                          std::to_string(r.newton_failures), format_number(r.lifted_radius), r.error});
     if (r.hand.nominal) continue;
     for (ModeTotals* t : {&totals[r.mode], &by_event[{r.event, r.mode}]}) {
       ++t->runs;
@@ -286,7 +307,8 @@ int run_study_passivity(const PassivityOptions& o) {
      << "0.5 mm; impact at 200 mm/s.\n"
      << "- Oscillates: the force's content above about 90 Hz (the force less its 11-tick moving average) swings over 0.1 N "
         "peak to peak in every 50 ms window for 0.3 s or more without halving, or the force jumps between 1 % and 99 % of the device's "
-        "largest force within 5 ticks on 3 ticks or more (app/study/passivity_metrics.h).\n\n"
+        "largest force within 5 ticks on 3 ticks or more, or the contact begins again within 0.25 s of its end and "
+        "reaches 10 % of the device's largest force 3 times or more (bouncing; app/study/passivity_metrics.h).\n\n"
      << "## Verdicts\n\n| mode | runs | oscillate | failed | ticks with a controller force | ticks the controller acted | "
         "largest controller force (N) | felt stiffness / off: median | below 10 % of off |\n|---|---|---|---|---|---|---|---|---|\n";
   for (const std::string& mode : o.modes) {
@@ -313,6 +335,23 @@ int run_study_passivity(const PassivityOptions& o) {
        << num(t_on.adjusting_ticks ? static_cast<double>(t_hr.adjusting_ticks) / t_on.adjusting_ticks : NAN) << "x fewer), "
        << "largest controller force " << num(t_on.max_controller_force_n) << " N against " << num(t_hr.max_controller_force_n) << " N ("
        << num(t_on.max_controller_force_n > 0 ? t_hr.max_controller_force_n / t_on.max_controller_force_n : NAN) << "x lower).\n";
+  // The linear verdict against the runs with the layer off and no event (each hand once).
+  {
+    long said_rings = 0, rang = 0, said_stable = 0, rang_anyway = 0;
+    for (const Run& r : runs) {
+      if (r.mode != "off" || r.event != "none" || r.hand.nominal || !r.error.empty() || !std::isfinite(r.lifted_radius)) continue;
+      if (r.lifted_radius >= 1)
+        ++said_rings, rang += r.oscillation.oscillates;
+      else
+        ++said_stable, rang_anyway += r.oscillation.oscillates;
+    }
+    if (said_rings + said_stable > 0)
+      md << "- The lifting with the hand in the loop (haptics/stability_analysis.h; at the stiffness, gains and mode of each run's "
+            "stiffest frame, the hand linearised in contact), against the runs with the layer off and no event: it calls "
+         << said_rings << " of " << said_rings + said_stable << " hands unstable, of which " << rang << " oscillated; of the "
+         << said_stable << " it calls stable, " << rang_anyway << " oscillated. The nominal hand: radius "
+         << (off ? num(off->lifted_radius, "%.3f") : "-") << ".\n";
+  }
   md << "\n## By event\n\n| event |";
   for (const std::string& mode : o.modes) md << " " << mode << ": oscillate / runs |";
   md << "\n|---|";
@@ -339,7 +378,8 @@ int run_study_passivity(const PassivityOptions& o) {
     if (r.mode == "on" && (r.oscillation.oscillates || !r.error.empty()) && listed++ < 40)
       md << "- " << r.event << ", " << hand_text(r.hand) << ": "
          << (r.error.empty() ? "ringing " + num(r.oscillation.ringing_s) + " s (" + num(r.oscillation.ringing_ptp_n) + " N), chatter " +
-                                   std::to_string(r.oscillation.chatter_ticks) + " ticks"
+                                   std::to_string(r.oscillation.chatter_ticks) + " ticks, bounces " +
+                                   std::to_string(r.oscillation.bounces)
                              : "failed: " + r.error)
          << "\n";
   if (listed == 0) md << "None.\n";
