@@ -44,7 +44,22 @@ Oscillation detect_oscillation(const std::vector<double>& force, double period_s
         break;
       }
   }
-  out.oscillates = out.ringing_s >= c.sustained_s - 1e-9 || out.chatter_ticks >= c.chatter_ticks;
+  // Contacts: runs of ticks with a force over 1 % of the clamp; a bounce is one that begins within
+  // bounce_gap_s of the last one's end and reaches bounce_share of the clamp.
+  const long gap = std::lround(c.bounce_gap_s / period_s);
+  long last_end = -1;
+  for (long k = 0; k < n;) {
+    if (!(force[static_cast<std::size_t>(k)] > 0.01 * clamp_n)) {
+      ++k;
+      continue;
+    }
+    const long begin = k;
+    double peak = 0;
+    for (; k < n && force[static_cast<std::size_t>(k)] > 0.01 * clamp_n; ++k) peak = std::max(peak, force[static_cast<std::size_t>(k)]);
+    if (last_end >= 0 && begin - last_end <= gap && peak >= c.bounce_share * clamp_n) ++out.bounces;
+    last_end = k;
+  }
+  out.oscillates = out.ringing_s >= c.sustained_s - 1e-9 || out.chatter_ticks >= c.chatter_ticks || out.bounces >= c.bounces;
   return out;
 }
 

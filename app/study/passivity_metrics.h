@@ -19,7 +19,12 @@ namespace fetouch::app {
 //     light hand's own decaying mode, not the loop's);
 //   - chatter at the clamp: ticks at 99 % of the device's largest force or more within 5 ticks of
 //     one at 1 % or less, at least `chatter_ticks` of them (the force jumping between nothing and
-//     everything).
+//     everything);
+//   - bouncing (since 2026-11-27): a contact that begins again within `bounce_gap_s` of the end of
+//     the one before and whose force reaches `bounce_share` of the device's largest force, at least
+//     `bounces` times (the hand thrown off the tissue and back, over and over: a slow instability,
+//     a few hertz, that neither the ring's high-pass nor the chatter's five ticks see; a trajectory
+//     does not poke three times within a quarter second of each release).
 struct OscillationCriterion {
   int smoothing_ticks = 11;
   double window_s = 0.05;
@@ -27,12 +32,16 @@ struct OscillationCriterion {
   double sustained_s = 0.3;
   double decay_share = 0.5;
   long chatter_ticks = 3;
+  double bounce_gap_s = 0.25;
+  double bounce_share = 0.1;
+  long bounces = 3;
 };
 
 struct Oscillation {
   double ringing_s = 0;     // the longest stretch of windows that ring without dying out, s
   double ringing_ptp_n = 0; // the largest high-frequency peak-to-peak in any window, N
   long chatter_ticks = 0;
+  long bounces = 0;         // contacts that began again soon after the last and pressed hard
   bool oscillates = false;
 };
 

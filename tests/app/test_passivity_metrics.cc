@@ -27,6 +27,36 @@ std::vector<double> held_with(double frequency_hz, double amplitude_n, double gr
   return f;
 }
 
+// A force of `peak` in half-sine humps of `hump_s`, each after a gap of `gap_s` (0 N), `count` of
+// them from 0.2 s on, in 3 s at 1 kHz.
+std::vector<double> humps(int count, double hump_s, double gap_s, double peak) {
+  std::vector<double> f(3000, 0.0);
+  double start = 0.2;
+  for (int h = 0; h < count; ++h, start += hump_s + gap_s)
+    for (std::size_t k = 0; k < f.size(); ++k) {
+      const double t = k * kT - start;
+      if (t > 0 && t < hump_s) f[k] = peak * std::sin(kPi * t / hump_s);
+    }
+  return f;
+}
+
+// The hand thrown off a stiff tissue and back at a few hertz (what a 0.57 kg hand on a 230 N/m,
+// 0.5 N s/m grip does on the 1 MPa block under PI: humps up to the clamp, 0.1 s on, 0.1 s off)
+// oscillates, though its force rises over tens of ticks (no chatter) and below 90 Hz (no ring).
+TEST(PassivityMetrics, AHandBouncingOffTheTissueOscillates) {
+  const Oscillation o = detect_oscillation(humps(10, 0.1, 0.1, 8.5), kT, 8.5);
+  EXPECT_EQ(o.chatter_ticks, 0);
+  EXPECT_LT(o.ringing_s, 0.3);
+  EXPECT_EQ(o.bounces, 9);
+  EXPECT_TRUE(o.oscillates);
+  // Two pokes of a trajectory half a second apart, and one rebound after an impact, do not.
+  EXPECT_FALSE(detect_oscillation(humps(2, 0.8, 0.5, 8.5), kT, 8.5).oscillates);
+  EXPECT_EQ(detect_oscillation(humps(2, 0.05, 0.02, 3), kT, 8.5).bounces, 1);
+  EXPECT_FALSE(detect_oscillation(humps(2, 0.05, 0.02, 3), kT, 8.5).oscillates);
+  // Bounces too light to count (under 10 % of the clamp: a hand grazing the surface) do not either.
+  EXPECT_EQ(detect_oscillation(humps(10, 0.1, 0.1, 0.5), kT, 8.5).bounces, 0);
+}
+
 TEST(PassivityMetrics, AFortyHertzRingOfAFewTenthsOfANewtonOscillates) {
   // The 11-tick mean passes 71 % of a 40 Hz sine: 0.3 N leaves 0.17 N peak to peak above 0.1 N.
   const Oscillation o = detect_oscillation(held_with(40, 0.3, 0), kT, 8.5);
