@@ -315,7 +315,7 @@ int run_stability(const StabilityOptions& o) {
     auto held = p;
     HandParameters hand;
     hand.mass_kg = o.hand[0], hand.stiffness_n_per_m = o.hand[1], hand.damping_n_s_per_m = o.hand[2];
-    if (!(hand.mass_kg > 0) || !(hand.stiffness_n_per_m > 0) || !(hand.damping_n_s_per_m >= 0) || !held.stiffness.allFinite()) {
+    if (!(hand.mass_kg > 0) || !(hand.stiffness_n_per_m > 0) || !(hand.damping_n_s_per_m >= 0)) {
       std::cerr << "error: --hand: the mass and stiffness must be positive and the damping not negative, not " << o.hand[0]
                 << " " << o.hand[1] << " " << o.hand[2] << "\n";
       return kExitBadInput;

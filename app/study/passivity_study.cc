@@ -47,7 +47,9 @@ struct Run {
   long ticks = 0, controller_ticks = 0, adjusting_ticks = 0, generation_events = 0, newton_failures = 0;
   double max_controller_force_n = 0, min_energy_j = 0, min_scale = 1;
   // The lifting with this run's hand in the loop (haptics/stability_analysis.h), at the stiffness,
-  // gains and mode of the run's stiffest frame: the linear verdict the run is set against.
+  // gains and mode of the run's stiffest frame: the linear verdict the run is set against. The hand
+  // as it starts (an event's change to it aside), the tissue's frame-rate damping left out (the
+  // frames record none), every mode of the condensed stiffness with a hand on each contact.
   double lifted_radius = std::numeric_limits<double>::quiet_NaN();
   std::string error;            // a run that could not finish
   std::vector<double> force;    // device 0's force magnitude per tick (for the plot)
