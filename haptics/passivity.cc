@@ -48,6 +48,8 @@ void check(const PassivitySettings& s) {
   };
   positive(s.period_s, "the period");
   positive(s.recovery_per_s, "recovery_per_s");
+  if (!(s.bounce_gap_s >= 0) || !std::isfinite(s.bounce_gap_s))
+    throw std::invalid_argument("passivity: bounce_gap_s must be zero or more and finite, not " + std::to_string(s.bounce_gap_s));
   positive(s.max_step_n, "max_step_n");
   positive(s.velocity_floor_m_per_s, "velocity_floor_m_per_s");
   positive(s.max_force_n, "the device's largest force");
@@ -99,7 +101,12 @@ Eigen::Vector3d PassivityPort::filter(const Eigen::Vector3d& position, const Eig
 Eigen::Vector3d PassivityPort::scaling(const Eigen::Vector3d& requested) noexcept {
   const double request = requested.norm();
   const bool touching = request > 0;
-  if (touching && !touching_) bank_ = settings_.allowance_j;  // a contact begins: nothing lent yet
+  // A contact that begins within bounce_gap_s of the last one's end is a bounce of it (the hand
+  // thrown off and back): its bank and ceiling carry on. Reset at every touch, each bounce would
+  // start with a fresh allowance, and a hand could bounce three to five times before s fell.
+  const long bounce_ticks = std::lround(settings_.bounce_gap_s / settings_.period_s);
+  if (touching && !touching_ && apart_ticks_ > bounce_ticks) bank_ = settings_.allowance_j;
+  apart_ticks_ = touching ? 0 : apart_ticks_ + 1;
   touching_ = touching;
   // The bank is A plus the port's energy since the contact began, plus A for each halving: it is
   // below zero only when the contact has handed the hand (halvings + 1) A more than it was given,
@@ -112,7 +119,7 @@ Eigen::Vector3d PassivityPort::scaling(const Eigen::Vector3d& requested) noexcep
   // Out of contact the ceiling climbs back; in contact it holds: raising the stiffness of a
   // compressed spring hands its owner energy (K x^2 / 2 for each unit of K), which is what the layer
   // is there to prevent.
-  if (!touching) ceiling_ = std::min(1.0, ceiling_ + settings_.recovery_per_s * settings_.period_s);
+  if (!touching && apart_ticks_ > bounce_ticks) ceiling_ = std::min(1.0, ceiling_ + settings_.recovery_per_s * settings_.period_s);
   // s follows the ceiling, its force step bounded by max_step_n (any step at all out of contact).
   const double step = touching ? settings_.max_step_n / request : 1.0;
   scale_ = std::clamp(ceiling_, scale_ - step, scale_ + step);

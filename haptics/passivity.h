@@ -23,7 +23,8 @@
 //     drives s: a bank, set to A (the allowance) when a contact begins, gains the port's energy
 //     each tick; when it falls below zero the contact has handed the hand A more than it was
 //     given, the ceiling of s halves and the bank gets another A (a halving waits until s has
-//     reached the last one). Held energy only raises the bank: a compressed tissue springing back
+//     reached the last one; a contact that begins within bounce_gap_s of the last one's end is a
+//     bounce of it and keeps its bank). Held energy only raises the bank: a compressed tissue springing back
 //     is not generation. s follows the ceiling down at most max_step_n / |f_req| a tick (no force
 //     step over max_step_n from the controller); the ceiling climbs back towards 1 at
 //     recovery_per_s only between contacts, since raising the stiffness of a compressed spring
@@ -62,6 +63,9 @@ struct PassivitySettings {
   double allowance_j = 2e-5;       // A: energy a contact may lend the hand before the controller acts
   double max_step_n = 0.1;         // the controller's force changes by at most this per tick
   double recovery_per_s = 0.5;     // scaling: how fast the ceiling of s climbs back towards 1
+  // scaling: a contact that begins within this long of the last one's end is a bounce of it (its
+  // bank and ceiling carry on, and the ceiling does not climb in the gap).
+  double bounce_gap_s = 0.25;
   double velocity_floor_m_per_s = 1e-4;  // hannaford_ryu: no damping below this speed
   // The device's largest force (the safety layer's clamp): the controller's force is measured
   // against what the device could have been sent, not against a request beyond its reach.
@@ -115,6 +119,7 @@ class PassivityPort {
   double energy_ = 0, min_energy_ = 0, max_control_ = 0;
   double bank_ = 0, scale_ = 1, ceiling_ = 1, min_scale_ = 1;
   bool touching_ = false;
+  long apart_ticks_ = 1L << 40;  // ticks since the last contact ended
   std::uint64_t controller_ticks_ = 0, adjusting_ticks_ = 0, generating_ticks_ = 0, generation_events_ = 0;
 };
 

@@ -190,12 +190,37 @@ TEST(PassivityLayer, ControllerForceIsBoundedAndSmooth) {
   EXPECT_GT(port.controller_ticks(), 0u) << "random motion against random forces generates energy";
 }
 
+// Four contacts of 50 ticks, each handing the hand 1.5e-5 J (1 N held while the device moves out
+// by 0.3 um a tick), less than the allowance (2e-5 J) alone. A hand thrown off and back, 50 ms
+// apart, is one contact bouncing: the bank carries over and runs dry at the second, and the
+// stiffness is halved. Pokes 0.5 s apart are contacts of their own, each with its allowance.
+double lowest_scale_over_contacts(long gap_ticks) {
+  PassivityPort port{PassivitySettings{}};
+  Eigen::Vector3d position = Eigen::Vector3d::Zero();
+  for (int contact = 0; contact < 4; ++contact) {
+    for (int k = 0; k < 50; ++k) {
+      position.z() += 3e-7;
+      port.sent(port.filter(position, Eigen::Vector3d(0, 0, 3e-4), Eigen::Vector3d(0, 0, 1)));
+    }
+    for (long k = 0; k < gap_ticks; ++k) port.sent(port.filter(position, Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero()));
+  }
+  return port.min_scale();
+}
+
+TEST(PassivityLayer, ABounceIsTheSameContactAndKeepsItsBank) {
+  EXPECT_LT(lowest_scale_over_contacts(50), 0.75);  // halved (s on its way to 1/2)
+  EXPECT_EQ(lowest_scale_over_contacts(500), 1.0);
+}
+
 TEST(PassivitySettings, RefusesValuesOutOfRange) {
   PassivitySettings s;
   s.max_step_n = 0;
   EXPECT_THROW(check(s), std::invalid_argument);
   s = PassivitySettings{};
   s.allowance_j = -1;
+  EXPECT_THROW(check(s), std::invalid_argument);
+  s = PassivitySettings{};
+  s.bounce_gap_s = -0.1;
   EXPECT_THROW(check(s), std::invalid_argument);
   PassivityMode mode;
   EXPECT_TRUE(parse_passivity_mode("observe", mode));
