@@ -57,7 +57,8 @@ void check(const PassivitySettings& s) {
     throw std::invalid_argument("passivity: allowance_j must be zero or more and finite, not " + std::to_string(s.allowance_j));
 }
 
-PassivityPort::PassivityPort(const PassivitySettings& settings) : settings_(settings) { check(settings); }
+PassivityPort::PassivityPort(const PassivitySettings& settings)
+    : settings_(settings), bounce_ticks_((check(settings), std::lround(settings.bounce_gap_s / settings.period_s))) {}
 
 Eigen::Vector3d PassivityPort::filter(const Eigen::Vector3d& position, const Eigen::Vector3d& velocity,
                                       const Eigen::Vector3d& requested) noexcept {
@@ -104,8 +105,7 @@ Eigen::Vector3d PassivityPort::scaling(const Eigen::Vector3d& requested) noexcep
   // A contact that begins within bounce_gap_s of the last one's end is a bounce of it (the hand
   // thrown off and back): its bank and ceiling carry on. Reset at every touch, each bounce would
   // start with a fresh allowance, and a hand could bounce three to five times before s fell.
-  const long bounce_ticks = std::lround(settings_.bounce_gap_s / settings_.period_s);
-  if (touching && !touching_ && apart_ticks_ > bounce_ticks) bank_ = settings_.allowance_j;
+  if (touching && !touching_ && apart_ticks_ > bounce_ticks_) bank_ = settings_.allowance_j;
   apart_ticks_ = touching ? 0 : apart_ticks_ + 1;
   touching_ = touching;
   // The bank is A plus the port's energy since the contact began, plus A for each halving: it is
@@ -119,7 +119,7 @@ Eigen::Vector3d PassivityPort::scaling(const Eigen::Vector3d& requested) noexcep
   // Out of contact the ceiling climbs back; in contact it holds: raising the stiffness of a
   // compressed spring hands its owner energy (K x^2 / 2 for each unit of K), which is what the layer
   // is there to prevent.
-  if (!touching && apart_ticks_ > bounce_ticks) ceiling_ = std::min(1.0, ceiling_ + settings_.recovery_per_s * settings_.period_s);
+  if (!touching && apart_ticks_ > bounce_ticks_) ceiling_ = std::min(1.0, ceiling_ + settings_.recovery_per_s * settings_.period_s);
   // s follows the ceiling, its force step bounded by max_step_n (any step at all out of contact).
   const double step = touching ? settings_.max_step_n / request : 1.0;
   scale_ = std::clamp(ceiling_, scale_ - step, scale_ + step);

@@ -119,6 +119,7 @@ class PassivityPort {
   double energy_ = 0, min_energy_ = 0, max_control_ = 0;
   double bank_ = 0, scale_ = 1, ceiling_ = 1, min_scale_ = 1;
   bool touching_ = false;
+  long bounce_ticks_;             // bounce_gap_s in ticks
   long apart_ticks_ = 1L << 40;  // ticks since the last contact ended
   std::uint64_t controller_ticks_ = 0, adjusting_ticks_ = 0, generating_ticks_ = 0, generation_events_ = 0;
 };

@@ -202,10 +202,13 @@ double hand_spectral_radius(const ScalarLoop& p, const ScalarHand& hand) {
   const bool zoh = p.hold == HoldKind::zoh;
   const double kh = p.gains.proportional, w = predictor ? p.compliance : 0.0;
   const int loop_size = integrator ? 5 : 4, n = loop_size + hand.rows;
+  // Row or column a of the map is entry slot(a) of the full state [ps, h, pf, f, s, hand]: the
+  // integrator's entry is skipped without one.
+  const auto slot = [loop_size](int a) { return a < loop_size ? a : 5 + (a - loop_size); };
   Matrix phi(n, n);
   for (int a = 0; a < n; ++a) {
     double x[9] = {0, 0, 0, 0, 0, 0, 0, 0, 0};
-    x[a < loop_size ? a : 5 + (a - loop_size)] = 1;
+    x[slot(a)] = 1;
     const double ps = x[0], h = x[1], pf = x[2], f = x[3];
     double s = x[4];
     Eigen::Vector4d state(x[5], x[6], x[7], x[8]);
@@ -227,7 +230,7 @@ double hand_spectral_radius(const ScalarLoop& p, const ScalarHand& hand) {
       state = hand.phi * state - hand.force * force;
     }
     const double y[9] = {pending_surface, ps, pending_force, pf, s, state(0), state(1), state(2), state(3)};
-    for (int b = 0; b < n; ++b) phi(b, a) = y[b < loop_size ? b : 5 + (b - loop_size)];
+    for (int b = 0; b < n; ++b) phi(b, a) = y[slot(b)];
   }
   Eigen::EigenSolver<Matrix> eigen(phi, /*computeEigenvectors=*/false);
   return eigen.eigenvalues().cwiseAbs().maxCoeff();
