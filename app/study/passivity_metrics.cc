@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <stdexcept>
 
 namespace fetouch::app {
 
@@ -86,6 +87,61 @@ double felt_stiffness(const std::vector<Eigen::Vector3d>& forces, const std::vec
   if (count < 10) return nan;
   const double var = sxx - sx * sx / count;
   return var > 0 ? (sxy - sx * sy / count) / var : nan;
+}
+
+}  // namespace fetouch::app
+
+namespace fetouch::app {
+
+Oscillation judge_against_ideal(Oscillation run, const Oscillation& ideal, const OscillationCriterion& c) {
+  run.ideal_bounces = ideal.bounces;
+  run.oscillates = run.ringing_s >= c.sustained_s - 1e-9 || run.chatter_ticks >= c.chatter_ticks ||
+                   run.bounces - ideal.bounces >= c.bounces;
+  return run;
+}
+
+std::optional<IdealWall> wall_at_first_touch(const std::vector<Eigen::Vector3d>& forces,
+                                             const std::vector<Eigen::Vector3d>& positions, double stiffness_n_per_m,
+                                             double clamp_n) {
+  const std::size_t n = std::min(forces.size(), positions.size());
+  for (std::size_t k = 0; k < n; ++k) {
+    if (!(forces[k].norm() > 0)) continue;
+    IdealWall wall;
+    wall.point = positions[k > 0 ? k - 1 : 0];
+    wall.normal = forces[k].normalized();
+    wall.stiffness_n_per_m = stiffness_n_per_m, wall.clamp_n = clamp_n;
+    return wall;
+  }
+  return std::nullopt;
+}
+
+std::vector<double> ideal_wall_forces(const haptics::Trajectory& trajectory, const haptics::HandParameters& hand,
+                                      const std::vector<haptics::HandEvent>& events, const IdealWall& wall,
+                                      double period_s, long max_ticks) {
+  if (!(wall.stiffness_n_per_m > 0) || !(wall.clamp_n > 0) || !(period_s > 0))
+    throw std::invalid_argument("ideal wall: the stiffness, the clamp and the period must be positive");
+  // K T_s / 2 <= 0.1 N s/m, and at least 100 steps a tick.
+  const int substeps = static_cast<int>(std::max(100.0, std::ceil(5 * wall.stiffness_n_per_m * period_s)));
+  const double step = period_s / substeps;
+  haptics::VirtualOperator hand_model(trajectory, hand, step, events);
+  // The session's ticks: one a period from the trajectory's first time to its last (resampled()).
+  long ticks = (hand_model.ticks() + substeps - 1) / substeps;
+  if (max_ticks >= 0) ticks = std::min(ticks, max_ticks);
+  const Eigen::Vector3d normal = wall.normal.normalized();
+  std::vector<double> forces(static_cast<std::size_t>(std::max(0L, ticks)), 0.0);
+  for (long k = 0; k < ticks; ++k) {
+    double sum = 0;
+    int steps = 0;
+    for (; steps < substeps && !hand_model.finished(); ++steps) {
+      const haptics::DeviceState state = hand_model.read();
+      const double depth = normal.dot(wall.point - state.position_m);
+      const double f = depth > 0 ? std::min(wall.stiffness_n_per_m * depth, wall.clamp_n) : 0.0;
+      hand_model.write(f * normal);
+      sum += f;
+    }
+    forces[static_cast<std::size_t>(k)] = steps > 0 ? sum / steps : 0.0;
+  }
+  return forces;
 }
 
 }  // namespace fetouch::app

@@ -51,6 +51,7 @@ struct Run {
   // as it starts (an event's change to it aside), the tissue's frame-rate damping left out (the
   // frames record none), every mode of the condensed stiffness with a hand on each contact.
   double lifted_radius = std::numeric_limits<double>::quiet_NaN();
+  double stiffest_n_per_m = 0;  // the stiffest frame's largest condensed stiffness
   std::string error;            // a run that could not finish
   std::vector<double> force;    // device 0's force magnitude per tick (for the plot)
 };
@@ -107,9 +108,15 @@ config::Scene with_hand(const config::Scene& base, const config::HandModel& mode
   return scene;
 }
 
-// `first_forces`: when given, device 0's force per tick.
+// Each device's forces and positions per tick, for the study's nominal run.
+struct Traces {
+  std::vector<std::vector<Eigen::Vector3d>> forces, positions;
+};
+
+// `ideal`: when given, per device, the same hand and event on the ideal tissue (judge_against_ideal);
+// `traces`: when given, filled with the run's forces and positions.
 Run run_one(const config::Scene& scene, const Hand& hand, const std::string& event, const std::string& mode, long max_ticks,
-            std::vector<Eigen::Vector3d>* first_forces = nullptr) {
+            const std::vector<Oscillation>* ideal = nullptr, Traces* traces = nullptr) {
   Run r;
   r.mode = mode, r.event = event, r.hand = hand;
   try {
@@ -126,12 +133,14 @@ Run run_one(const config::Scene& scene, const Hand& hand, const std::string& eve
     for (std::size_t d = 0; d < s.forces.size(); ++d) {
       std::vector<double> size;
       for (const Eigen::Vector3d& f : s.forces[d]) size.push_back(f.norm());
-      const Oscillation o = detect_oscillation(size, loop.period_s, loop.safety.max_force_n);
+      Oscillation o = detect_oscillation(size, loop.period_s, loop.safety.max_force_n);
+      if (ideal && d < ideal->size()) o = judge_against_ideal(o, (*ideal)[d]);
       if (d == 0 || std::make_pair(o.oscillates, o.ringing_s) > std::make_pair(r.oscillation.oscillates, r.oscillation.ringing_s))
         r.oscillation = o;
       if (d == 0) r.felt_n_per_m = felt_stiffness(s.forces[0], s.positions[0]), r.force = std::move(size);
     }
-    if (first_forces && !s.forces.empty()) *first_forces = s.forces[0];
+    if (traces) traces->forces = s.forces, traces->positions = s.positions;
+    for (double k : s.stiffest_eigenvalues) r.stiffest_n_per_m = std::max(r.stiffest_n_per_m, k);
     if (!s.stiffest_eigenvalues.empty() && s.stiffest_local_model >= 0 && s.stiffest_hold >= 0 && !scene.probes.empty()) {
       haptics::LoopParameters p;
       p.local_model = static_cast<haptics::LocalModelKind>(s.stiffest_local_model);
@@ -214,8 +223,8 @@ int run_study_passivity(const PassivityOptions& o) {
   // from its first touch to its last) and their direction (into the tissue, against the force there).
   std::vector<Run> runs;
   const config::Vec3 down{0, 0, -1};
-  std::vector<Eigen::Vector3d> reference_forces;
-  Run reference = run_one(with_hand(base, defaults, nominal, "none", 0, down, "off"), nominal, "none", "off", max_ticks, &reference_forces);
+  Traces traces;
+  Run reference = run_one(with_hand(base, defaults, nominal, "none", 0, down, "off"), nominal, "none", "off", max_ticks, nullptr, &traces);
   progress.update(++done);
   if (!reference.error.empty()) throw std::runtime_error("the nominal run (the default hand, layer off) failed: " + reference.error);
   long first = -1, last = -1;
@@ -228,16 +237,53 @@ int run_study_passivity(const PassivityOptions& o) {
   const double period = 1.0 / base.haptics.rate_hz;
   const double event_at = 0.5 * (first + last) * period;
   config::Vec3 press = down;
-  const Eigen::Vector3d middle = reference_forces[static_cast<std::size_t>((first + last) / 2)];
+  const Eigen::Vector3d middle = traces.forces[0][static_cast<std::size_t>((first + last) / 2)];
   if (middle.norm() > 0) press = {-middle.x() / middle.norm(), -middle.y() / middle.norm(), -middle.z() / middle.norm()};
   log::info() << "study passivity: events at " << event_at << " s, along (" << press[0] << ", " << press[1] << ", " << press[2] << ")";
 
+  // The ideal tissue for each device (passivity_metrics.h): where it first touched in the nominal
+  // run, the stiffest frame's condensed stiffness. Each hand and event is played on it once, and
+  // every mode's run is judged against it.
+  const double clamp = base.haptics.max_force_n;
+  std::vector<std::optional<IdealWall>> walls;
+  for (std::size_t d = 0; d < traces.forces.size(); ++d)
+    walls.push_back(wall_at_first_touch(traces.forces[d], traces.positions[d], reference.stiffest_n_per_m, clamp));
+  std::map<std::tuple<std::string, double, double, double>, std::vector<Oscillation>> ideals;
+  const auto ideal_of = [&](const Hand& h, const std::string& event) -> const std::vector<Oscillation>* {
+    if (!(reference.stiffest_n_per_m > 0)) return nullptr;
+    auto [at, fresh] = ideals.try_emplace({event, h.mass_kg, h.stiffness_n_per_m, h.damping_n_s_per_m});
+    if (!fresh) return &at->second;
+    const config::Scene scene = with_hand(base, defaults, h, event, event_at, press, "off");
+    for (std::size_t d = 0; d < walls.size(); ++d) {
+      Oscillation verdict;
+      if (walls[d]) {
+        const config::Probe& probe = scene.probes[d];
+        verdict = detect_oscillation(ideal_wall_forces(probe_trajectory(probe, static_cast<int>(d)),
+                                                       hand_parameters(probe.device.hand), hand_events(probe.device.hand),
+                                                       *walls[d], period, max_ticks),
+                                     period, clamp);
+      }
+      at->second.push_back(verdict);
+    }
+    return &at->second;
+  };
+  for (std::size_t d = 0; d < traces.forces.size(); ++d) {  // the nominal run judged again, against its own ideal
+    std::vector<double> size;
+    for (const Eigen::Vector3d& f : traces.forces[d]) size.push_back(f.norm());
+    const Oscillation judged = judge_against_ideal(detect_oscillation(size, period, clamp), ideal_of(nominal, "none")->at(d));
+    if (d == 0 || std::make_pair(judged.oscillates, judged.ringing_s) >
+                      std::make_pair(reference.oscillation.oscillates, reference.oscillation.ringing_s))
+      reference.oscillation = judged;
+  }
+
   for (const std::string& mode : o.modes) {
-    runs.push_back(mode == "off" ? reference : run_one(with_hand(base, defaults, nominal, "none", 0, down, mode), nominal, "none", mode, max_ticks));
+    runs.push_back(mode == "off" ? reference
+                                 : run_one(with_hand(base, defaults, nominal, "none", 0, down, mode), nominal, "none", mode,
+                                           max_ticks, ideal_of(nominal, "none")));
     progress.update(++done);
     for (const std::string& event : o.events)
       for (const Hand& h : box) {
-        runs.push_back(run_one(with_hand(base, defaults, h, event, event_at, press, mode), h, event, mode, max_ticks));
+        runs.push_back(run_one(with_hand(base, defaults, h, event, event_at, press, mode), h, event, mode, max_ticks, ideal_of(h, event)));
         runs.back().force.clear();  // the nominal runs' forces are plotted; the box's are summed up
         runs.back().force.shrink_to_fit();
         progress.update(++done);
@@ -248,7 +294,7 @@ int run_study_passivity(const PassivityOptions& o) {
   // The table: one row a run.
   StudyTable table;
   table.columns = {"mode", "event", "mass_kg", "stiffness_n_per_m", "damping_n_s_per_m", "nominal", "oscillates",
-                   "ringing_s", "ringing_ptp_n", "chatter_ticks", "bounces", "max_force_n", "felt_stiffness_n_per_m",
+                   "ringing_s", "ringing_ptp_n", "chatter_ticks", "bounces", "ideal_bounces", "max_force_n", "felt_stiffness_n_per_m",
                    "controller_ticks", "controller_share", "adjusting_ticks", "max_controller_force_n", "generation_events",
                    "min_port_energy_j", "min_scale", "newton_failures", "lifted_radius_with_hand", "error"};
   std::map<std::string, ModeTotals> totals;
@@ -263,7 +309,8 @@ int run_study_passivity(const PassivityOptions& o) {
                           format_number(r.hand.damping_n_s_per_m), r.hand.nominal ? "1" : "0",
                           r.error.empty() ? (r.oscillation.oscillates ? "1" : "0") : "",
                           format_number(r.oscillation.ringing_s), format_number(r.oscillation.ringing_ptp_n),
-                          std::to_string(r.oscillation.chatter_ticks), std::to_string(r.oscillation.bounces), format_number(r.max_force_n), format_number(r.felt_n_per_m),
+                          std::to_string(r.oscillation.chatter_ticks), std::to_string(r.oscillation.bounces),
+                          std::to_string(r.oscillation.ideal_bounces), format_number(r.max_force_n), format_number(r.felt_n_per_m),
                           std::to_string(r.controller_ticks), format_number(share), std::to_string(r.adjusting_ticks),
                           format_number(r.max_controller_force_n),
                           std::to_string(r.generation_events), format_number(r.min_energy_j), format_number(r.min_scale),
@@ -310,7 +357,10 @@ int run_study_passivity(const PassivityOptions& o) {
      << "- Oscillates: the force's content above about 90 Hz (the force less its 11-tick moving average) swings over 0.1 N "
         "peak to peak in every 50 ms window for 0.3 s or more without halving, or the force jumps between 1 % and 99 % of the device's "
         "largest force within 5 ticks on 3 ticks or more, or the contact begins again within 0.25 s of its end and "
-        "reaches 10 % of the device's largest force 3 times or more (bouncing; app/study/passivity_metrics.h).\n\n"
+        "reaches 10 % of the device's largest force 3 times or more than the same hand and event do on the ideal tissue "
+        "(bouncing; the ideal tissue: a flat elastic wall of the stiffest frame's condensed stiffness, "
+     << num(reference.stiffest_n_per_m, "%.0f") << " N/m, where the default hand first touched, behind the same clamp, in "
+        "continuous time: column ideal_bounces; app/study/passivity_metrics.h).\n\n"
      << "## Verdicts\n\n| mode | runs | oscillate | failed | ticks with a controller force | ticks the controller acted | "
         "largest controller force (N) | felt stiffness / off: median | below 10 % of off |\n|---|---|---|---|---|---|---|---|---|\n";
   for (const std::string& mode : o.modes) {
@@ -381,7 +431,8 @@ int run_study_passivity(const PassivityOptions& o) {
       md << "- " << r.event << ", " << hand_text(r.hand) << ": "
          << (r.error.empty() ? "ringing " + num(r.oscillation.ringing_s) + " s (" + num(r.oscillation.ringing_ptp_n) + " N), chatter " +
                                    std::to_string(r.oscillation.chatter_ticks) + " ticks, bounces " +
-                                   std::to_string(r.oscillation.bounces)
+                                   std::to_string(r.oscillation.bounces) + " (the ideal tissue " +
+                                   std::to_string(r.oscillation.ideal_bounces) + ")"
                              : "failed: " + r.error)
          << "\n";
   if (listed == 0) md << "None.\n";

@@ -1,7 +1,10 @@
 // The passivity study's judge (app/study/passivity_metrics.h) on signals whose answer is known: a
 // steady ring well above tremor is oscillation, physiological tremor is not, a ring that dies out
 // is not, one that grows is, and a force jumping between nothing and the clamp is chatter. The felt
-// stiffness of a linear spring pressed along any direction is its constant.
+// stiffness of a linear spring pressed along any direction is its constant. The ideal tissue (a
+// flat elastic wall in continuous time) against closed forms: the static press of a hand's spring
+// in series with the wall, and an elastic impact's impulse 2 m v and peak force v sqrt(m K); and
+// bounces count against the loop only beyond the ideal tissue's.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -111,6 +114,89 @@ TEST(PassivityMetrics, FeltStiffnessOfALinearSpringIsItsConstant) {
   }
   EXPECT_NEAR(felt_stiffness(forces, positions), k, 1e-6 * k);
   EXPECT_TRUE(std::isnan(felt_stiffness(std::vector<Eigen::Vector3d>(10, Eigen::Vector3d::Zero()), positions)));
+}
+
+// A trajectory of straight segments through (t, z) points at x = y = 0.
+haptics::Trajectory along_z(const std::vector<std::pair<double, double>>& points) {
+  haptics::Trajectory path;
+  for (const auto& [t, z] : points) path.times_s.push_back(t), path.positions_m.emplace_back(0, 0, z);
+  return path;
+}
+
+// The hand's spring in series with the wall: pressed d behind it, the force settles to
+// k K / (k + K) d.
+TEST(IdealWall, AStaticPressIsTheHandsSpringInSeriesWithTheWall) {
+  haptics::HandParameters hand;  // 0.3 kg, 300 N/m, 8 N s/m
+  IdealWall wall;
+  wall.point = Eigen::Vector3d::Zero(), wall.normal = Eigen::Vector3d::UnitZ();
+  wall.stiffness_n_per_m = 2e4, wall.clamp_n = 100;
+  const double depth = 8e-3;
+  const std::vector<double> f = ideal_wall_forces(along_z({{0, 0.01}, {0.5, -depth}, {3, -depth}}), hand, {}, wall, kT);
+  ASSERT_EQ(f.size(), 3001u);  // as the session runs it: a tick from 0 s to 3 s inclusive
+  const double expected = hand.stiffness_n_per_m * wall.stiffness_n_per_m / (hand.stiffness_n_per_m + wall.stiffness_n_per_m) * depth;
+  EXPECT_NEAR(f.back(), expected, 1e-3 * expected);
+  EXPECT_EQ(f[100], 0.0);  // 8 mm in front of the wall at 0.1 s
+  // Behind a clamp under that force, the force is the clamp.
+  wall.clamp_n = 1;
+  EXPECT_NEAR(ideal_wall_forces(along_z({{0, 0.01}, {0.5, -depth}, {3, -depth}}), hand, {}, wall, kT).back(), 1.0, 1e-12);
+}
+
+// A hand struck towards the wall at v with no damping and a negligible spring: the contact is half
+// a period of m on K, its impulse 2 m v and its peak v sqrt(m K) (Hertz's linear case).
+TEST(IdealWall, AnElasticImpactHasTheClosedFormImpulseAndPeak) {
+  haptics::HandParameters hand;
+  hand.mass_kg = 0.2, hand.stiffness_n_per_m = 1e-3, hand.damping_n_s_per_m = 0;
+  IdealWall wall;
+  wall.point = Eigen::Vector3d::Zero(), wall.normal = Eigen::Vector3d::UnitZ();
+  wall.stiffness_n_per_m = 2e4, wall.clamp_n = 1e3;
+  haptics::HandEvent strike;
+  strike.kind = haptics::HandEventKind::impact, strike.at_s = 0.1, strike.speed_m_per_s = 0.2;
+  strike.direction = -Eigen::Vector3d::UnitZ();
+  const std::vector<double> f = ideal_wall_forces(along_z({{0, 1e-3}, {0.5, 1e-3}}), hand, {strike}, wall, kT);
+  double impulse = 0, peak = 0;
+  long contacts = 0;
+  for (std::size_t k = 0; k < f.size(); ++k) {
+    impulse += f[k] * kT, peak = std::max(peak, f[k]);
+    contacts += f[k] > 0 && (k == 0 || f[k - 1] == 0);
+  }
+  EXPECT_EQ(contacts, 1);  // it flies back and stays away
+  EXPECT_NEAR(impulse, 2 * hand.mass_kg * 0.2, 0.01 * 2 * hand.mass_kg * 0.2);
+  const double apex = 0.2 * std::sqrt(hand.mass_kg * wall.stiffness_n_per_m);
+  EXPECT_NEAR(peak, apex, 0.03 * apex);  // a tick's mean near the apex
+  EXPECT_LE(peak, apex * (1 + 1e-6));
+}
+
+TEST(IdealWall, ItIsPlacedWhereTheForceFirstRoseFacingIt) {
+  std::vector<Eigen::Vector3d> forces(5, Eigen::Vector3d::Zero()), positions;
+  for (int k = 0; k < 5; ++k) positions.emplace_back(0, 0, 0.01 - 1e-3 * k);
+  forces[3] = Eigen::Vector3d(0, 3, 4), forces[4] = Eigen::Vector3d(0, 6, 8);
+  const std::optional<IdealWall> wall = wall_at_first_touch(forces, positions, 5e3, 8.5);
+  ASSERT_TRUE(wall);
+  EXPECT_EQ(wall->point, positions[2]);
+  EXPECT_NEAR((wall->normal - Eigen::Vector3d(0, 0.6, 0.8)).norm(), 0, 1e-12);
+  EXPECT_EQ(wall->stiffness_n_per_m, 5e3);
+  EXPECT_FALSE(wall_at_first_touch(std::vector<Eigen::Vector3d>(5, Eigen::Vector3d::Zero()), positions, 5e3, 8.5));
+}
+
+// Five bounces where the ideal tissue makes three are two too few to blame the loop; where it
+// makes one they are the loop's. Ringing and chatter are the loop's whatever the ideal does.
+TEST(PassivityMetrics, BouncesCountOnlyBeyondTheIdealTissues) {
+  const Oscillation five = detect_oscillation(humps(6, 0.1, 0.1, 8.5), kT, 8.5);
+  ASSERT_EQ(five.bounces, 5);
+  ASSERT_TRUE(five.oscillates);
+  Oscillation ideal;
+  ideal.bounces = 3;
+  EXPECT_FALSE(judge_against_ideal(five, ideal).oscillates);
+  EXPECT_EQ(judge_against_ideal(five, ideal).ideal_bounces, 3);
+  ideal.bounces = 2;
+  EXPECT_TRUE(judge_against_ideal(five, ideal).oscillates);
+  Oscillation ring;
+  ring.ringing_s = 0.5;
+  ideal.bounces = 0, ideal.ringing_s = 1.0;
+  EXPECT_TRUE(judge_against_ideal(ring, ideal).oscillates);
+  Oscillation chatter;
+  chatter.chatter_ticks = 3;
+  EXPECT_TRUE(judge_against_ideal(chatter, ideal).oscillates);
 }
 
 }  // namespace
