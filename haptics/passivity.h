@@ -31,6 +31,17 @@
 //     itself hands its owner energy. A contact whose bank never runs dry (a hand whose damping
 //     absorbs the hold's leak, the nominal case) is never scaled. No division by a velocity: s
 //     acts on the port's energy alone.
+//     The bank alone cannot see a loop that rings about a deep press: the press put far more into
+//     the springs (tens of mJ) than a ring generates a cycle (tenths of a mJ), and the ring can hand
+//     that back cycle after cycle, held at the clamp, before the bank runs dry (plain PO/PC's "early
+//     storage hides later generation"). So the layer also books each cycle: the depth d along the
+//     force from where the contact began, its mean over cycle_mean_s, and E each time d crosses
+//     that mean inwards (after having been cycle_band_m below it). Over a closed cycle a passive
+//     port takes energy in (the area of its force-depth loop, whatever it stores), so a cycle in
+//     which E fell is generation; between crossings at different depths the store's change, the
+//     mean force times the change of depth, is taken off first (a press drifting in or out with a
+//     tremor on it is not generation). Those falls add up (a dissipating cycle pays them back,
+//     down to nothing owed), and when they pass the allowance the ceiling halves as for a dry bank.
 //   - hannaford_ryu (the baseline of Hannaford & Ryu 2002): when E < 0, a damper
 //     alpha = -E / (T |v|^2) dissipates the whole deficit over the next tick, c = alpha v
 //     (f = f_req - alpha v); below a velocity floor it does nothing (alpha would be unbounded).
@@ -66,6 +77,10 @@ struct PassivitySettings {
   // scaling: a contact that begins within this long of the last one's end is a bounce of it (its
   // bank and ceiling carry on, and the ceiling does not climb in the gap).
   double bounce_gap_s = 0.25;
+  // scaling: the cycle books (above): the depth's running mean's time constant, and how far the
+  // depth must go below it and back above it for a crossing to count (noise is not a cycle).
+  double cycle_mean_s = 0.05;
+  double cycle_band_m = 2e-5;
   double velocity_floor_m_per_s = 1e-4;  // hannaford_ryu: no damping below this speed
   // The device's largest force (the safety layer's clamp): the controller's force is measured
   // against what the device could have been sent, not against a request beyond its reach.
@@ -109,7 +124,9 @@ class PassivityPort {
   double min_scale() const { return min_scale_; }  // the lowest s so far
 
  private:
-  Eigen::Vector3d scaling(const Eigen::Vector3d& requested) noexcept;
+  Eigen::Vector3d scaling(const Eigen::Vector3d& position, const Eigen::Vector3d& requested) noexcept;
+  // The cycle books of one tick in contact; true when the cycles have generated the allowance.
+  bool cycle_generated(const Eigen::Vector3d& position, const Eigen::Vector3d& requested, bool new_contact) noexcept;
   Eigen::Vector3d hannaford_ryu(const Eigen::Vector3d& velocity) const noexcept;
 
   PassivitySettings settings_;
@@ -119,6 +136,11 @@ class PassivityPort {
   double energy_ = 0, min_energy_ = 0, max_control_ = 0;
   double bank_ = 0, scale_ = 1, ceiling_ = 1, min_scale_ = 1;
   bool touching_ = false;
+  // The cycle books: where the contact began, the depth's running mean, whether the depth has been
+  // below it, E at the last inward crossing (has_cycle_: one seen), and the generation owed.
+  Eigen::Vector3d contact_point_ = Eigen::Vector3d::Zero();
+  double depth_mean_ = 0, cycle_energy_ = 0, cycle_depth_ = 0, cycle_force_ = 0, cycle_debt_ = 0;
+  bool below_mean_ = false, has_cycle_ = false;
   long bounce_ticks_;             // bounce_gap_s in ticks
   long apart_ticks_ = 1L << 40;  // ticks since the last contact ended
   std::uint64_t controller_ticks_ = 0, adjusting_ticks_ = 0, generating_ticks_ = 0, generation_events_ = 0;

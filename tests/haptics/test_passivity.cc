@@ -212,6 +212,37 @@ TEST(PassivityLayer, ABounceIsTheSameContactAndKeepsItsBank) {
   EXPECT_EQ(lowest_scale_over_contacts(500), 1.0);
 }
 
+// A press 5 mm into a spring of 2000 N/m (25 mJ in the port's bank), then a ring of 0.5 mm at 20 Hz
+// about it under a force f = K d + c d' (d the depth, from where the contact began). With c < 0 the
+// rendering hands the hand |c| pi w A^2 = 0.49 mJ a cycle: the bank, 50 cycles deep, would not
+// see it for 2.5 s; the cycle books halve the stiffness within a few cycles. With c = 5 N s/m, more
+// than the hold's leak K T / 2 = 1 N s/m, the ring is passive and nothing halves, and neither does a passive ring on a press that backs
+// out at 4 mm/s (each cycle ends shallower, the store's change is not generation).
+double scale_after_ring(double c, double drift_m_per_s, const PassivitySettings& settings = {}) {
+  PassivityPort port(settings);
+  const double stiffness = 2000, w = 2 * 3.14159265358979 * 20, amplitude = 5e-4;
+  for (int k = 0; k < 1500; ++k) {
+    const double t = k * kPeriod;
+    const double ring = t < 0.5 ? 0.0 : amplitude * std::sin(w * (t - 0.5));
+    const double ring_rate = t < 0.5 ? 0.0 : amplitude * w * std::cos(w * (t - 0.5));
+    const double depth = 1e-4 + (t < 0.5 ? 1e-2 * t : 5e-3 - drift_m_per_s * (t - 0.5)) + ring;
+    const double rate = (t < 0.5 ? 1e-2 : -drift_m_per_s) + ring_rate;
+    const Eigen::Vector3d position(0, 0, -depth), velocity(0, 0, -rate);
+    const Eigen::Vector3d requested(0, 0, std::max(0.0, stiffness * depth + c * rate));
+    port.sent(port.filter(position, velocity, requested));
+  }
+  return port.scale();
+}
+
+TEST(PassivityLayer, ARingAboutADeepPressIsCaughtByTheCycleNotTheBank) {
+  EXPECT_LT(scale_after_ring(-5, 0), 0.3);  // halved twice or more in 0.5 s of ring
+  PassivitySettings bank_only;
+  bank_only.cycle_band_m = 1;  // no depth ever crosses: the bank alone
+  EXPECT_EQ(scale_after_ring(-5, 0, bank_only), 1.0) << "the bank must miss it for this test to mean anything";
+  EXPECT_EQ(scale_after_ring(5, 0), 1.0);
+  EXPECT_EQ(scale_after_ring(5, 4e-3), 1.0);
+}
+
 TEST(PassivitySettings, RefusesValuesOutOfRange) {
   PassivitySettings s;
   s.max_step_n = 0;
