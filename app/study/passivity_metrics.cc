@@ -22,13 +22,17 @@ Oscillation detect_oscillation(const std::vector<double>& force, double period_s
   std::vector<double> swing;
   for (long start = half; start + window <= n - half; start += window) {
     double lo = std::numeric_limits<double>::infinity(), hi = -lo;
+    int sign = 0, crossings = 0;  // sign changes of what is left, beyond a quarter of ringing_n
     for (long k = start; k < start + window; ++k) {
       const double mean = (prefix[static_cast<std::size_t>(k + half + 1)] - prefix[static_cast<std::size_t>(k - half)]) / (2 * half + 1);
       const double rest = force[static_cast<std::size_t>(k)] - mean;
       lo = std::min(lo, rest), hi = std::max(hi, rest);
+      const int now = rest > 0.25 * c.ringing_n ? 1 : rest < -0.25 * c.ringing_n ? -1 : 0;
+      if (now != 0 && now != sign) crossings += sign != 0, sign = now;
     }
     out.ringing_ptp_n = std::max(out.ringing_ptp_n, hi - lo);
-    swing.push_back(hi - lo);
+    // A frame's step (a zero-order hold's staircase) swings once; a ring goes back and forth.
+    swing.push_back(crossings >= c.ringing_crossings ? hi - lo : 0.0);
   }
   long longest = 0;
   for (std::size_t a = 0; a < swing.size(); ++a) {

@@ -17,7 +17,9 @@ namespace fetouch::app {
 //     is left is its content above about 1 / (smoothing_ticks T): 90 Hz at 11 ticks of 1 ms, far
 //     above physiological tremor, 6-12 Hz, and below the rings a sampled wall makes) has a
 //     peak-to-peak over `ringing_n` in every window of `window_s` for at least `sustained_s` in a
-//     row, and its last window still swings at least `decay_share` of its first: a stable loop's
+//     row, changing sign (beyond a quarter of ringing_n) at least `ringing_crossings` times in each
+//     (since 2026-11-27: a zero-order hold's frame steps, one jump a 50 ms frame, swing as much
+//     but do not go back and forth), and its last window still swings at least `decay_share` of its first: a stable loop's
 //     answer to a step (an impact, a grip) dies out (a ring that halves within `sustained_s` is a
 //     light hand's own decaying mode, not the loop's);
 //   - chatter at the clamp: ticks at 99 % of the device's largest force or more within 5 ticks of
@@ -36,6 +38,7 @@ struct OscillationCriterion {
   int smoothing_ticks = 11;
   double window_s = 0.05;
   double ringing_n = 0.1;
+  int ringing_crossings = 3;
   double sustained_s = 0.3;
   double decay_share = 0.5;
   long chatter_ticks = 3;

@@ -78,6 +78,23 @@ TEST(PassivityMetrics, PhysiologicalTremorIsNotOscillation) {
   }
 }
 
+// A zero-order hold's staircase: a press whose held surface steps once a 50 ms frame, the force
+// jumping 0.3 N at each step (more than ringing_n after the moving average) for 1.5 s. It swings,
+// but once a window, never back and forth: no ring. The same steps with a 150 Hz ring of 0.1 N on
+// them do ring.
+TEST(PassivityMetrics, AZeroOrderHoldsFrameStepsAreNotARing) {
+  std::vector<double> steps(2000, 0.0), ringing(2000, 0.0);
+  for (std::size_t k = 0; k < steps.size(); ++k) {
+    steps[k] = 1.0 + 0.3 * std::min<std::size_t>(k / 50, 30);
+    ringing[k] = steps[k] + (k > 200 ? 0.1 * std::sin(2 * kPi * 150 * k * kT) : 0.0);
+  }
+  const Oscillation staircase = detect_oscillation(steps, kT, 20);
+  EXPECT_GT(staircase.ringing_ptp_n, 0.1) << "the steps must swing for this test to mean anything";
+  EXPECT_EQ(staircase.ringing_s, 0.0);
+  EXPECT_FALSE(staircase.oscillates);
+  EXPECT_TRUE(detect_oscillation(ringing, kT, 20).oscillates);
+}
+
 TEST(PassivityMetrics, ARingThatDiesOutIsNotOscillationAndOneThatGrowsIs) {
   // 2 N at 60 Hz, halving every 35 ms: loud, but gone well within 0.3 s.
   EXPECT_FALSE(detect_oscillation(held_with(60, 2.0, -std::log(2.0) / 0.035), kT, 8.5).oscillates);
