@@ -267,10 +267,11 @@ int run_study_passivity(const PassivityOptions& o) {
     }
     return &at->second;
   };
-  for (std::size_t d = 0; d < traces.forces.size(); ++d) {  // the nominal run judged again, against its own ideal
+  const std::vector<Oscillation>* nominal_ideal = ideal_of(nominal, "none");
+  for (std::size_t d = 0; nominal_ideal && d < traces.forces.size(); ++d) {  // the nominal run judged again, against its ideal
     std::vector<double> size;
     for (const Eigen::Vector3d& f : traces.forces[d]) size.push_back(f.norm());
-    const Oscillation judged = judge_against_ideal(detect_oscillation(size, period, clamp), ideal_of(nominal, "none")->at(d));
+    const Oscillation judged = judge_against_ideal(detect_oscillation(size, period, clamp), nominal_ideal->at(d));
     if (d == 0 || std::make_pair(judged.oscillates, judged.ringing_s) >
                       std::make_pair(reference.oscillation.oscillates, reference.oscillation.ringing_s))
       reference.oscillation = judged;
@@ -279,7 +280,7 @@ int run_study_passivity(const PassivityOptions& o) {
   for (const std::string& mode : o.modes) {
     runs.push_back(mode == "off" ? reference
                                  : run_one(with_hand(base, defaults, nominal, "none", 0, down, mode), nominal, "none", mode,
-                                           max_ticks, ideal_of(nominal, "none")));
+                                           max_ticks, nominal_ideal));
     progress.update(++done);
     for (const std::string& event : o.events)
       for (const Hand& h : box) {
@@ -355,7 +356,7 @@ int run_study_passivity(const PassivityOptions& o) {
      << num(press[1]) << ", " << num(press[2]) << ") (into the tissue): release; grip x3 in 10 ms; tremor 8, 10, 12 Hz of "
      << "0.5 mm; impact at 200 mm/s.\n"
      << "- Oscillates: the force's content above about 90 Hz (the force less its 11-tick moving average) swings over 0.1 N "
-        "peak to peak in every 50 ms window for 0.3 s or more without halving, or the force jumps between 1 % and 99 % of the device's "
+        "peak to peak, changing sign three times or more, in every 50 ms window for 0.3 s or more without halving, or the force jumps between 1 % and 99 % of the device's "
         "largest force within 5 ticks on 3 ticks or more, or the contact begins again within 0.25 s of its end and "
         "reaches 10 % of the device's largest force 3 times or more than the same hand and event do on the ideal tissue "
         "(bouncing; the ideal tissue: a flat elastic wall of the stiffest frame's condensed stiffness, "
