@@ -93,10 +93,6 @@ double felt_stiffness(const std::vector<Eigen::Vector3d>& forces, const std::vec
   return var > 0 ? (sxy - sx * sy / count) / var : nan;
 }
 
-}  // namespace fetouch::app
-
-namespace fetouch::app {
-
 Oscillation judge_against_ideal(Oscillation run, const Oscillation& ideal, const OscillationCriterion& c) {
   run.ideal_bounces = ideal.bounces;
   run.oscillates = run.ringing_s >= c.sustained_s - 1e-9 || run.chatter_ticks >= c.chatter_ticks ||
