@@ -60,7 +60,9 @@ void check(const PassivitySettings& s) {
 }
 
 PassivityPort::PassivityPort(const PassivitySettings& settings)
-    : settings_(settings), bounce_ticks_((check(settings), std::lround(settings.bounce_gap_s / settings.period_s))) {}
+    : settings_(settings),
+      bounce_ticks_((check(settings), std::lround(settings.bounce_gap_s / settings.period_s))),
+      mean_weight_(std::min(1.0, settings.period_s / settings.cycle_mean_s)) {}
 
 Eigen::Vector3d PassivityPort::filter(const Eigen::Vector3d& position, const Eigen::Vector3d& velocity,
                                       const Eigen::Vector3d& requested) noexcept {
@@ -140,7 +142,7 @@ bool PassivityPort::cycle_generated(const Eigen::Vector3d& position, const Eigen
   }
   // The force pushes the hand out of the tissue: depth grows against it.
   const double depth = requested.normalized().dot(contact_point_ - position);
-  depth_mean_ += (depth - depth_mean_) * std::min(1.0, settings_.period_s / settings_.cycle_mean_s);
+  depth_mean_ += (depth - depth_mean_) * mean_weight_;
   if (depth < depth_mean_ - settings_.cycle_band_m) below_mean_ = true;
   if (below_mean_ && depth > depth_mean_ + settings_.cycle_band_m) {
     below_mean_ = false;  // an inward crossing: one cycle closed since the last

@@ -142,6 +142,7 @@ class PassivityPort {
   double depth_mean_ = 0, cycle_energy_ = 0, cycle_depth_ = 0, cycle_force_ = 0, cycle_debt_ = 0;
   bool below_mean_ = false, has_cycle_ = false;
   long bounce_ticks_;             // bounce_gap_s in ticks
+  double mean_weight_;            // the depth's running mean: T / cycle_mean_s, at most 1
   long apart_ticks_ = 1L << 40;  // ticks since the last contact ended
   std::uint64_t controller_ticks_ = 0, adjusting_ticks_ = 0, generating_ticks_ = 0, generation_events_ = 0;
 };

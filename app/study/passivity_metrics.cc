@@ -7,6 +7,15 @@
 
 namespace fetouch::app {
 
+namespace {
+
+// The verdict of the stated criterion, bounces counted beyond `ideal_bounces`.
+bool oscillates(const Oscillation& o, long ideal_bounces, const OscillationCriterion& c) {
+  return o.ringing_s >= c.sustained_s - 1e-9 || o.chatter_ticks >= c.chatter_ticks || o.bounces - ideal_bounces >= c.bounces;
+}
+
+}  // namespace
+
 Oscillation detect_oscillation(const std::vector<double>& force, double period_s, double clamp_n,
                                const OscillationCriterion& c) {
   Oscillation out;
@@ -64,7 +73,7 @@ Oscillation detect_oscillation(const std::vector<double>& force, double period_s
     if (last_end >= 0 && begin - last_end <= gap && peak >= c.bounce_share * clamp_n) ++out.bounces;
     last_end = k;
   }
-  out.oscillates = out.ringing_s >= c.sustained_s - 1e-9 || out.chatter_ticks >= c.chatter_ticks || out.bounces >= c.bounces;
+  out.oscillates = oscillates(out, 0, c);
   return out;
 }
 
@@ -95,8 +104,7 @@ double felt_stiffness(const std::vector<Eigen::Vector3d>& forces, const std::vec
 
 Oscillation judge_against_ideal(Oscillation run, const Oscillation& ideal, const OscillationCriterion& c) {
   run.ideal_bounces = ideal.bounces;
-  run.oscillates = run.ringing_s >= c.sustained_s - 1e-9 || run.chatter_ticks >= c.chatter_ticks ||
-                   run.bounces - ideal.bounces >= c.bounces;
+  run.oscillates = oscillates(run, ideal.bounces, c);
   return run;
 }
 

@@ -108,6 +108,21 @@ config::Scene with_hand(const config::Scene& base, const config::HandModel& mode
   return scene;
 }
 
+// Every device's forces judged (against its ideal when given); the run keeps the worst: an
+// oscillating one first, then the longest ring.
+Oscillation worst_oscillation(const std::vector<std::vector<Eigen::Vector3d>>& forces, double period_s, double clamp_n,
+                              const std::vector<Oscillation>* ideal) {
+  Oscillation worst;
+  for (std::size_t d = 0; d < forces.size(); ++d) {
+    std::vector<double> size;
+    for (const Eigen::Vector3d& f : forces[d]) size.push_back(f.norm());
+    Oscillation o = detect_oscillation(size, period_s, clamp_n);
+    if (ideal && d < ideal->size()) o = judge_against_ideal(o, (*ideal)[d]);
+    if (d == 0 || std::make_pair(o.oscillates, o.ringing_s) > std::make_pair(worst.oscillates, worst.ringing_s)) worst = o;
+  }
+  return worst;
+}
+
 // Each device's forces and positions per tick, for the study's nominal run.
 struct Traces {
   std::vector<std::vector<Eigen::Vector3d>> forces, positions;
@@ -129,15 +144,10 @@ Run run_one(const config::Scene& scene, const Hand& hand, const std::string& eve
     session.max_ticks = max_ticks;
     const SessionSummary s = run_lockstep(*rig.environment, rig.devices, session);
     r.ticks = s.ticks, r.max_force_n = s.max_force_n, r.newton_failures = s.newton_failures;
-    // Every device judged; the run keeps the worst (an oscillating one first, then the longest ring).
-    for (std::size_t d = 0; d < s.forces.size(); ++d) {
-      std::vector<double> size;
-      for (const Eigen::Vector3d& f : s.forces[d]) size.push_back(f.norm());
-      Oscillation o = detect_oscillation(size, loop.period_s, loop.safety.max_force_n);
-      if (ideal && d < ideal->size()) o = judge_against_ideal(o, (*ideal)[d]);
-      if (d == 0 || std::make_pair(o.oscillates, o.ringing_s) > std::make_pair(r.oscillation.oscillates, r.oscillation.ringing_s))
-        r.oscillation = o;
-      if (d == 0) r.felt_n_per_m = felt_stiffness(s.forces[0], s.positions[0]), r.force = std::move(size);
+    r.oscillation = worst_oscillation(s.forces, loop.period_s, loop.safety.max_force_n, ideal);
+    if (!s.forces.empty()) {
+      r.felt_n_per_m = felt_stiffness(s.forces[0], s.positions[0]);
+      for (const Eigen::Vector3d& f : s.forces[0]) r.force.push_back(f.norm());
     }
     if (traces) traces->forces = s.forces, traces->positions = s.positions;
     for (double k : s.stiffest_eigenvalues) r.stiffest_n_per_m = std::max(r.stiffest_n_per_m, k);
@@ -268,14 +278,8 @@ int run_study_passivity(const PassivityOptions& o) {
     return &at->second;
   };
   const std::vector<Oscillation>* nominal_ideal = ideal_of(nominal, "none");
-  for (std::size_t d = 0; nominal_ideal && d < traces.forces.size(); ++d) {  // the nominal run judged again, against its ideal
-    std::vector<double> size;
-    for (const Eigen::Vector3d& f : traces.forces[d]) size.push_back(f.norm());
-    const Oscillation judged = judge_against_ideal(detect_oscillation(size, period, clamp), nominal_ideal->at(d));
-    if (d == 0 || std::make_pair(judged.oscillates, judged.ringing_s) >
-                      std::make_pair(reference.oscillation.oscillates, reference.oscillation.ringing_s))
-      reference.oscillation = judged;
-  }
+  // The nominal run came before its walls did: judged again, against its ideal.
+  if (nominal_ideal) reference.oscillation = worst_oscillation(traces.forces, period, clamp, nominal_ideal);
 
   for (const std::string& mode : o.modes) {
     runs.push_back(mode == "off" ? reference
