@@ -137,17 +137,12 @@ bool PassivityPort::cycle_generated(const Eigen::Vector3d& position, const Eigen
                                     bool new_contact) noexcept {
   if (new_contact) {
     contact_point_ = position;
-    depth_mean_ = depth_trend_ = cycle_debt_ = 0;
+    depth_mean_ = cycle_debt_ = 0;
     below_mean_ = has_cycle_ = false;
   }
   // The force pushes the hand out of the tissue: depth grows against it.
   const double depth = requested.normalized().dot(contact_point_ - position);
-  // Holt's double smoothing: the mean follows a steady press without lagging it (a single
-  // exponential mean trails a press of speed v by v cycle_mean_s, and a ring smaller than that
-  // never goes below it: its cycles were not booked while the press went on).
-  const double level = depth_mean_;
-  depth_mean_ += depth_trend_ + (depth - depth_mean_ - depth_trend_) * mean_weight_;
-  depth_trend_ += (depth_mean_ - level - depth_trend_) * mean_weight_;
+  depth_mean_ += (depth - depth_mean_) * mean_weight_;
   if (depth < depth_mean_ - settings_.cycle_band_m) below_mean_ = true;
   if (below_mean_ && depth > depth_mean_ + settings_.cycle_band_m) {
     below_mean_ = false;  // an inward crossing: one cycle closed since the last

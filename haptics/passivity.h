@@ -35,9 +35,8 @@
 //     the springs (tens of mJ) than a ring generates a cycle (tenths of a mJ), and the ring can hand
 //     that back cycle after cycle, held at the clamp, before the bank runs dry (plain PO/PC's "early
 //     storage hides later generation"). So the layer also books each cycle: the depth d along the
-//     force from where the contact began, its mean over cycle_mean_s (Holt's double smoothing,
-//     level and trend, so that the mean follows a press that goes on instead of trailing it), and
-//     E each time d crosses that mean inwards (after having been cycle_band_m below it). Over a closed cycle a passive
+//     force from where the contact began, its mean over cycle_mean_s, and E each time d crosses
+//     that mean inwards (after having been cycle_band_m below it). Over a closed cycle a passive
 //     port takes energy in (the area of its force-depth loop, whatever it stores), so a cycle in
 //     which E fell is generation; between crossings at different depths the store's change, the
 //     mean force times the change of depth, is taken off first (a press drifting in or out with a
@@ -137,13 +136,13 @@ class PassivityPort {
   double energy_ = 0, min_energy_ = 0, max_control_ = 0;
   double bank_ = 0, scale_ = 1, ceiling_ = 1, min_scale_ = 1;
   bool touching_ = false;
-  // The cycle books: where the contact began, the depth's running mean and its trend, whether the depth has been
+  // The cycle books: where the contact began, the depth's running mean, whether the depth has been
   // below it, E at the last inward crossing (has_cycle_: one seen), and the generation owed.
   Eigen::Vector3d contact_point_ = Eigen::Vector3d::Zero();
-  double depth_mean_ = 0, depth_trend_ = 0, cycle_energy_ = 0, cycle_depth_ = 0, cycle_force_ = 0, cycle_debt_ = 0;
+  double depth_mean_ = 0, cycle_energy_ = 0, cycle_depth_ = 0, cycle_force_ = 0, cycle_debt_ = 0;
   bool below_mean_ = false, has_cycle_ = false;
   long bounce_ticks_;             // bounce_gap_s in ticks
-  double mean_weight_;            // the depth's running mean and trend: T / cycle_mean_s, at most 1
+  double mean_weight_;            // the depth's running mean: T / cycle_mean_s, at most 1
   long apart_ticks_ = 1L << 40;  // ticks since the last contact ended
   std::uint64_t controller_ticks_ = 0, adjusting_ticks_ = 0, generating_ticks_ = 0, generation_events_ = 0;
 };

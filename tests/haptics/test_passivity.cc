@@ -243,15 +243,6 @@ TEST(PassivityLayer, ARingAboutADeepPressIsCaughtByTheCycleNotTheBank) {
   EXPECT_EQ(scale_after_ring(5, 4e-3), 1.0);
 }
 
-// The same ring on a press that goes on at 20 mm/s: a running mean of the depth would trail the press
-// by 1 mm, twice the ring's amplitude, and the depth would never go below it; the books' mean
-// follows the press's trend (Holt's double smoothing), so the ring's cycles are booked while it
-// goes on, and a passive ring on the same press is not.
-TEST(PassivityLayer, ARingOnAPressThatGoesOnIsBookedWhileItGoesOn) {
-  EXPECT_LT(scale_after_ring(-5, -20e-3), 0.3);
-  EXPECT_EQ(scale_after_ring(5, -20e-3), 1.0);
-}
-
 TEST(PassivitySettings, RefusesValuesOutOfRange) {
   PassivitySettings s;
   s.max_step_n = 0;
