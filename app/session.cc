@@ -265,7 +265,8 @@ SessionSummary run_realtime(haptics::Environment& environment, std::vector<std::
 
   const CoreSplit cores = CoreSplit::make(settings.pin_haptic_core);
   std::atomic<int> haptic_core{-1};
-  // Stopping (a request, or a device's fault): the force ramps out over kRampOutS, then the
+  // Stopping (a request, or a device's fault): the force ramps out over kRampOutS in the loop's
+  // safety layer (what the hand is sent and the tissue is pressed with fade together), then the
   // session ends. A fault is reported once the threads have joined.
   const long ramp_out_ticks = std::max<long>(1, std::lround(kRampOutS / period));
   long stop_tick = -1;
@@ -297,13 +298,13 @@ SessionSummary run_realtime(haptics::Environment& environment, std::vector<std::
       const haptics::DeviceState state = devices[d]->read();
       points[d] = state.position_m, velocities[d] = state.velocity_m_per_s;
     }
-    const std::vector<haptics::ContactOutput>& out = loop.tick(points, velocities);
     if (stop_tick < 0 && settings.stop && settings.stop->load(std::memory_order_relaxed)) stop_tick = k;
     for (int d = 0; d < m && stop_tick < 0; ++d)
       if (const char* f = devices[d]->fault()) fault = f, fault_device = d, stop_tick = k;
-    const double scale = stop_tick < 0 ? 1.0 : std::max(0.0, 1.0 - double(k - stop_tick + 1) / double(ramp_out_ticks));
+    if (stop_tick == k) loop.ramp_out(ramp_out_ticks);  // the loop's safety layer fades the force from this tick
+    const std::vector<haptics::ContactOutput>& out = loop.tick(points, velocities);
     for (int d = 0; d < m; ++d) {
-      base.sample(k, points[d], last[d], out[d], devices[d]->write(scale * out[d].force), block[d]);
+      base.sample(k, points[d], last[d], out[d], devices[d]->write(out[d].force), block[d]);
       last[d] = points[d];
       if (monitor && d < SessionMonitor::kMaxDevices) monitor->force_n[d].store(block[d].force.norm(), std::memory_order_relaxed);
     }
@@ -332,7 +333,7 @@ SessionSummary run_realtime(haptics::Environment& environment, std::vector<std::
       if (!requests.publish()) skipped.fetch_add(1, std::memory_order_relaxed);
     }
     ran = ++k;
-    return k < ticks && !stopping.load(std::memory_order_relaxed) && !(stop_tick >= 0 && scale == 0);
+    return k < ticks && !stopping.load(std::memory_order_relaxed) && !loop.ramped_out();
   };
   std::thread haptic([&] {
     if (servo) {

@@ -20,11 +20,16 @@ Eigen::Matrix<double, 3, 2> tangent_basis(const Eigen::Vector3d& n) noexcept {
 }
 
 ContactPoint locate(const ContactFrame& frame, const Eigen::Vector3d& device) noexcept {
+  ContactPoint c;
+  if (frame.curvature.isZero(0)) {  // a plane: h = 0, s(u) is the device moved onto it along n
+    c.penetration = -frame.normal.dot(device - frame.point);
+    c.surface_point = device + c.penetration * frame.normal;
+    return c;
+  }
   const Eigen::Matrix<double, 3, 2> tangents = tangent_basis(frame.normal);
   const Eigen::Vector3d offset = device - frame.point;
   const Eigen::Vector2d u = tangents.transpose() * offset;
   const double height = -0.5 * u.dot(frame.curvature * u);
-  ContactPoint c;
   c.penetration = height - frame.normal.dot(offset);
   c.surface_point = frame.point + tangents * u + height * frame.normal;
   return c;

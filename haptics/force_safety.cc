@@ -27,6 +27,11 @@ Eigen::Vector3d ForceSafety::filter(const Eigen::Vector3d& requested,
     target *= gain;
   }
 
+  if (ramp_left_ >= 0) {
+    if (ramp_left_ > 0) --ramp_left_;
+    target *= static_cast<double>(ramp_left_) / static_cast<double>(ramp_total_);
+  }
+
   if (target.norm() > limits_.max_force_n) {
     ++clamped_;
     target = clamp_magnitude(target, limits_.max_force_n);

@@ -5,7 +5,9 @@
 // Per tick k with period T, requested force r(k) and the time s(k) since the last environment update:
 //   g(k)   = 1                                       if s(k) <= t_w
 //          = max(0, 1 - (s(k) - t_w) / t_f)          otherwise        (watchdog fade)
-//   c(k)   = finite(r(k)) ? g(k) r(k) : 0
+//   h(k)   = 1 until ramp_out(R) is asked at tick k0; then max(0, 1 - (k - k0 + 1) / R)
+//                                                                     (a stopping session's ramp out)
+//   c(k)   = finite(r(k)) ? g(k) h(k) r(k) : 0
 //   c(k)   = c(k) * min(1, F_max / |c(k)|)                            (magnitude clamp)
 //   F(k)   = F(k-1) + d * min(1, R T / |d|),  d = c(k) - F(k-1)        (rate limit)
 // F(k) stays inside the ball of radius F_max, because F(k-1) and c(k) both do and F(k) lies on the
@@ -42,6 +44,13 @@ class ForceSafety {
   Eigen::Vector3d filter(const Eigen::Vector3d& requested, double time_since_update_s) noexcept;
 
   void reset() noexcept { last_.setZero(); }
+  // Stopping: from the next filter() on, the force fades linearly to zero over `ticks` ticks (at
+  // least 1) and stays there; asking again changes nothing. ramped_out(): the fade is over.
+  void ramp_out(long ticks) noexcept {
+    if (ramp_left_ < 0) ramp_total_ = ramp_left_ = ticks < 1 ? 1 : ticks;
+  }
+  bool ramping_out() const noexcept { return ramp_left_ >= 0; }
+  bool ramped_out() const noexcept { return ramp_left_ == 0; }
   const ForceSafetyLimits& limits() const { return limits_; }
 
   // Counters for the recording: ticks whose request was not finite, clamped or rate limited,
@@ -54,6 +63,7 @@ class ForceSafety {
  private:
   ForceSafetyLimits limits_;
   Eigen::Vector3d last_ = Eigen::Vector3d::Zero();
+  long ramp_left_ = -1, ramp_total_ = 1;  // -1: not stopping
   std::uint64_t non_finite_ = 0, clamped_ = 0, rate_limited_ = 0, watchdog_ = 0;
 };
 

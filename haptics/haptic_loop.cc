@@ -26,7 +26,7 @@ HapticLoop::HapticLoop(const HapticLoopSettings& settings, const EnvironmentUpda
   if (settings.ratio < 1) throw std::invalid_argument("HapticLoop: the ratio N must be at least 1");
   if (initial.compliance.rows() != 3 * contacts_ || initial.compliance.cols() != 3 * contacts_)
     throw std::invalid_argument("HapticLoop: the compliance must be 3m x 3m");
-  local_model_.set_unilateral(true);
+  local_model_.set_unilateral(settings.unilateral);
   local_model_.set_integrator_limit(settings.integrator_limit_n);
   for (FrameSlot& slot : slots_) {
     slot.update = initial;
@@ -95,6 +95,40 @@ void HapticLoop::prepare(FrameSlot& slot) const {
   // A selection that finds nothing robustly stable keeps the least unstable gains it saw; the
   // recording shows it (selection.stable) and the safety layer still bounds the force.
   slot.gains = slot.selection.gains;
+}
+
+namespace {
+
+double depth(const ContactFrame& frame) { return -frame.normal.dot(frame.point); }
+
+void set_depth(ContactFrame& frame, double to) { frame.point -= (to - depth(frame)) * frame.normal; }
+
+}  // namespace
+
+void HapticLoop::frame_boundary(FrameBoundary& out) const {
+  const FrameSlot& answer = slots_[middle_.peek()];
+  const FrameSlot& newest = slots_[newest_];
+  out.answer_depth.resize(contacts_), out.newest_depth.resize(contacts_);
+  for (int c = 0; c < contacts_; ++c) {
+    out.answer_depth(c) = depth(answer.update.frames[c]);
+    out.newest_depth(c) = depth(newest.update.frames[c]);
+  }
+  out.answer_force = answer.normal_force;
+  out.newest_force = newest.normal_force;
+  out.integrator = local_model_.integrator();
+}
+
+void HapticLoop::set_frame_boundary(const FrameBoundary& state) {
+  if (!middle_.fresh()) throw std::logic_error("HapticLoop::set_frame_boundary: no answer is published");
+  FrameSlot& answer = slots_[middle_.peek()];
+  FrameSlot& newest = slots_[newest_];
+  for (int c = 0; c < contacts_; ++c) {
+    set_depth(answer.update.frames[c], state.answer_depth(c));
+    set_depth(newest.update.frames[c], state.newest_depth(c));
+  }
+  answer.normal_force = state.answer_force;
+  newest.normal_force = state.newest_force;
+  local_model_.set_integrator(state.integrator);
 }
 
 void HapticLoop::promote() noexcept {

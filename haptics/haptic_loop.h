@@ -1,6 +1,6 @@
 // The haptic loop in 3D for m contacts: what runs every tick at 1 kHz, between device and tissue.
 //
-// Per tick k = jN + i (ARCHITECTURE.md section 3, the timing of multirate_loop.h):
+// Per tick k = jN + i (ARCHITECTURE.md section 3; in normal coordinates: normal_loop.h):
 //   1. at i == 0, if an update was published during frame j - 1, it becomes the newest held one
 //      (the previous newest moves back) and its gains start blending in;
 //   2. hold: ZOH uses the newest update's contact frames; FOH interpolates the two newest (an
@@ -11,7 +11,9 @@
 //      on the normals, W_n = N' W N (N = blockdiag(n_c)); unilateral: F_c >= 0, reset on release;
 //   5. force F_c n_c on device c through its PassivityPort (passivity.h: the energy at the port
 //      the device sees, and the stiffness scaled down when the loop with the hand in it hands the
-//      hand energy), then its ForceSafety (finite, clamp, rate limit, watchdog); the proxy is the
+//      hand energy), then its ForceSafety (finite, watchdog, a stopping session's ramp out, clamp,
+//      rate limit): the one chain that shapes the force, which a device only maps to its own
+//      frame and units (and a PHANTOM cuts for its own errors and clutch); the proxy is the
 //      device point moved along n_c onto the held (or predicted) surface;
 //   6. at i == 0 the samples (device point, force -F_c n_c on the tissue) are decimated for the
 //      environment; its answer is published before the next frame starts.
@@ -58,6 +60,10 @@ struct HapticLoopSettings {
   // the coupled tissue, so the contacts then feel each other only through its frames.
   bool coupling = true;
   double integrator_limit_n = 1e300;
+  // A contact pushes and never pulls (F >= 0, the integrator reset on release): what devices run.
+  // False holds the contact on both sides, the loop's linearisation about a contact never lost:
+  // what the lifting (stability_analysis.h) analyses, on NormalLoop (normal_loop.h).
+  bool unilateral = true;
   ForceSafetyLimits safety;
   // The passivity layer per contact; its period is the loop's (period_s), whatever it says.
   PassivitySettings passivity;
@@ -125,6 +131,16 @@ struct FrameEnergy {
   double hand_j = 0, tissue_j = 0, held_j = 0, generated_j = 0;
 };
 
+// The loop between two frames, in normal coordinates: what the lifting (stability_analysis.h)
+// perturbs and reads back. Depths are along each contact's held normal, -n . point (into the
+// tissue); forces are the samples' normal forces (the Smith predictor's reference). During frame j
+// (before its first tick's promotion) the published answer is x_o(j-1), the newest held one x_o(j-2).
+struct FrameBoundary {
+  Eigen::VectorXd answer_depth, newest_depth;  // x_o(j-1), x_o(j-2)
+  Eigen::VectorXd answer_force, newest_force;  // F((j-1)N), F((j-2)N): the forces that produced them
+  Eigen::VectorXd integrator;                  // s(jN)
+};
+
 // How the identified stiffness of one contact compared with the condensed one, frame by frame.
 struct IdentificationCheck {
   long frames_compared = 0;     // frame starts in contact with a valid identification
@@ -168,6 +184,14 @@ class HapticLoop {
     back_ = middle_.publish(back_, replaced_unread);
   }
 
+  // Stopping (a request, a device's fault): every contact's force fades to zero over `ticks`
+  // ticks from the next tick on, in the safety layer (force_safety.h), so what the hand is sent
+  // and what the tissue is pressed with fade together. Real-time safe; asking again changes nothing.
+  void ramp_out(long ticks) noexcept {
+    for (ForceSafety& safety : safety_) safety.ramp_out(ticks);
+  }
+  bool ramped_out() const noexcept { return safety_.front().ramped_out(); }
+
   int contacts() const { return contacts_; }
   long ticks() const { return tick_count_; }
   const HapticLoopSettings& settings() const { return settings_; }
@@ -186,6 +210,11 @@ class HapticLoop {
   const std::vector<FrameEnergy>& frame_energy() const { return frame_energy_; }
   long generating_frames(int contact) const { return generating_frames_[contact]; }
   double max_generated_j(int contact) const { return max_generated_[contact]; }
+  // The frame boundary, between a publish() and the next tick (lockstep: after a tick that
+  // decimated was answered). set_frame_boundary moves the two slots' points along their normals
+  // and replaces the integrator; it throws if no answer is published. Neither is for the tick.
+  void frame_boundary(FrameBoundary& out) const;
+  void set_frame_boundary(const FrameBoundary& state);
   // Frame starts at which no new answer was there (real time: the solve outlasted its frame), and
   // the tick of the first (-1: none). Never in lockstep.
   long late_answers() const { return late_answers_; }

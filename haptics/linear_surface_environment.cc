@@ -25,6 +25,12 @@ void LinearSurfaceEnvironment::set_stiffness(const Eigen::MatrixXd& stiffness) {
   compliance_ = law_.compliance();
 }
 
+void LinearSurfaceEnvironment::set_reported_compliance(const Eigen::MatrixXd& compliance) {
+  if (compliance.rows() != law_.stiffness().rows() || compliance.cols() != law_.stiffness().cols())
+    throw std::invalid_argument("LinearSurfaceEnvironment: the reported compliance must be 3m x 3m");
+  compliance_ = compliance;
+}
+
 void LinearSurfaceEnvironment::initial(EnvironmentUpdate& out) {
   out.frames = rest_;
   out.compliance = compliance_;

@@ -27,6 +27,13 @@ class LinearSurfaceEnvironment final : public Environment {
 
   // A change of tissue (e.g. a stiffer region reached): takes effect at the next solve.
   void set_stiffness(const Eigen::MatrixXd& stiffness);
+  // The compliance reported to the loop instead of K0^-1 (3m x 3m): a condensation that is off, as
+  // a Smith predictor's model may be. Kept until the next set_stiffness.
+  void set_reported_compliance(const Eigen::MatrixXd& compliance);
+
+  // The frame-rate law's memory: the displacement u (3m) of the last answer, which B0 damps against.
+  const Eigen::VectorXd& displacement() const { return law_.surface(); }
+  void set_displacement(const Eigen::VectorXd& u) { law_.set_surface(u); }
 
  private:
   std::vector<ContactFrame> rest_;

@@ -33,6 +33,8 @@ class SlotExchange {
   bool fresh() const noexcept { return (middle_.load(std::memory_order_acquire) & kFresh) != 0; }
   // The reader, after fresh(): puts `released` in the middle, returns the freshly published slot.
   int take(int released) noexcept { return middle_.exchange(released, std::memory_order_acq_rel) & kIndex; }
+  // The slot in the middle now, without taking it (for a caller that owns both sides, as lockstep).
+  int peek() const noexcept { return middle_.load(std::memory_order_acquire) & kIndex; }
 
  private:
   static constexpr int kIndex = 3, kFresh = 4;  // up to four slots

@@ -6,41 +6,34 @@
 #include <cmath>
 #include <stdexcept>
 
-#include "haptics/linear_environment.h"
 
 namespace fetouch::haptics {
 
 namespace {
 
 // Packing of the frame-boundary state (see the header) into one vector and back. The loop is
-// positioned at a frame boundary j >= 1, just before the promotion of the pending answer.
+// positioned at a frame boundary j >= 1, just before the promotion of the published answer.
 struct StatePacking {
   int m = 1;
   bool integrator = false;
   int size() const { return (integrator ? 5 : 4) * m; }
 
-  void unpack(const Eigen::VectorXd& x, MultirateLoop& loop) const {
-    MultirateState& s = loop.state();
-    s.pending_surface = x.segment(0, m);
-    s.held_newest = x.segment(m, m);
-    s.pending_force = x.segment(2 * m, m);
-    s.force_newest = x.segment(3 * m, m);
-    s.held_previous.setZero();  // overwritten by the promotion
-    s.force_previous.setZero();
-    loop.environment().set_surface(s.pending_surface);  // the environment's own memory x_o(j-1)
-    loop.local_model().set_integrator(integrator ? Eigen::VectorXd(x.segment(4 * m, m))
-                                                 : Eigen::VectorXd::Zero(m));
+  void unpack(const Eigen::VectorXd& x, NormalLoop& loop, FrameBoundary& state) const {
+    state.answer_depth = x.segment(0, m);
+    state.newest_depth = x.segment(m, m);
+    state.answer_force = x.segment(2 * m, m);
+    state.newest_force = x.segment(3 * m, m);
+    state.integrator = integrator ? Eigen::VectorXd(x.segment(4 * m, m)) : Eigen::VectorXd::Zero(m);
+    loop.set_frame_boundary(state);
   }
 
-  Eigen::VectorXd pack(MultirateLoop& loop) const {
-    Eigen::VectorXd x(size());
-    const MultirateState& s = loop.state();
-    x.segment(0, m) = s.pending_surface;
-    x.segment(m, m) = s.held_newest;
-    x.segment(2 * m, m) = s.pending_force;
-    x.segment(3 * m, m) = s.force_newest;
-    if (integrator) x.segment(4 * m, m) = loop.local_model().integrator();
-    return x;
+  void pack(const NormalLoop& loop, FrameBoundary& state, Eigen::Ref<Eigen::VectorXd> x) const {
+    loop.frame_boundary(state);
+    x.segment(0, m) = state.answer_depth;
+    x.segment(m, m) = state.newest_depth;
+    x.segment(2 * m, m) = state.answer_force;
+    x.segment(3 * m, m) = state.newest_force;
+    if (integrator) x.segment(4 * m, m) = state.integrator;
   }
 };
 
@@ -58,14 +51,7 @@ LoopParameters LoopParameters::scalar(LocalModelKind kind, HoldKind hold, int ra
   return p;
 }
 
-MultirateLoop make_loop(const LoopParameters& p) {
-  LinearEnvironment environment(p.stiffness, p.damping);
-  LocalModel local(p.local_model, environment.contacts());
-  local.set_gains(p.gains);
-  if (local.has_predictor())
-    local.set_compliance(p.compliance.size() ? p.compliance : environment.compliance());
-  return MultirateLoop(std::move(local), std::move(environment), p.hold, p.ratio);
-}
+NormalLoop make_loop(const LoopParameters& p) { return NormalLoop(p); }
 
 namespace {
 
@@ -76,7 +62,10 @@ int hand_rows(const HandParameters& hand) { return hand.model == HandModelKind::
 
 StabilityResult analyse(const LoopParameters& p) {
   const int m = static_cast<int>(p.stiffness.rows());
-  MultirateLoop loop = make_loop(p);
+  NormalLoop loop(p);
+  Eigen::VectorXd device = Eigen::VectorXd::Zero(m), velocity = Eigen::VectorXd::Zero(m);
+  for (int i = 0; i < p.ratio; ++i) loop.tick(device, velocity);  // to a frame boundary, j = 1
+  FrameBoundary boundary;
 
   const StatePacking packing{m, has_integrator(p.local_model)};
   const int rows = p.hand ? hand_rows(*p.hand) : 0;
@@ -84,24 +73,23 @@ StabilityResult analyse(const LoopParameters& p) {
   Eigen::Matrix4d phi = Eigen::Matrix4d::Identity();
   Eigen::Matrix<double, 4, 3> gamma = Eigen::Matrix<double, 4, 3>::Zero();
   if (p.hand) hand_transition(*p.hand, 1.0, p.period_s, phi, gamma);
-  Eigen::VectorXd device = Eigen::VectorXd::Zero(m);
   Eigen::Matrix<double, 4, Eigen::Dynamic> hands(4, m);  // per contact: x_d, v_d, x_h, v_h
   StabilityResult result;
   result.monodromy.resize(n, n);
   for (int c = 0; c < n; ++c) {
     const Eigen::VectorXd unit = Eigen::VectorXd::Unit(n, c);
-    packing.unpack(unit.head(loop_size), loop);
+    packing.unpack(unit.head(loop_size), loop, boundary);
     hands.setZero();
     for (int k = 0; k < m; ++k) hands.col(k).head(rows) = unit.segment(loop_size + rows * k, rows);
-    loop.state().tick = p.ratio;  // a frame boundary after the first frame
     for (int i = 0; i < p.ratio; ++i) {
       device = hands.row(0).transpose();  // still (zero) without a hand
-      const Eigen::VectorXd& force = loop.tick(device);
+      velocity = hands.row(1).transpose();
+      const Eigen::VectorXd& force = loop.tick(device, velocity);
       // The rendered force pushes the device back out of the tissue: -F along the penetration.
       if (p.hand)
         for (int k = 0; k < m; ++k) hands.col(k) = phi * hands.col(k) - gamma.col(0) * force(k);
     }
-    result.monodromy.col(c).head(loop_size) = packing.pack(loop);
+    packing.pack(loop, boundary, result.monodromy.col(c).head(loop_size));
     for (int k = 0; k < m; ++k) result.monodromy.col(c).segment(loop_size + rows * k, rows) = hands.col(k).head(rows);
   }
 

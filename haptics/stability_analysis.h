@@ -2,9 +2,11 @@
 // frame it is a time-invariant linear map of its frame-boundary state, X(j+1) = Phi X(j) (the
 // monodromy matrix). The loop is stable iff the spectral radius of Phi is below 1.
 //
-// Phi is built column by column by running the very code of multirate_loop.h for one frame from
-// each unit state with the device held still (x_h = 0); the analysis cannot disagree with the
-// simulation about timing. The frame-boundary state, for m contacts, is
+// Phi is built column by column by running the devices' own loop (haptic_loop.h, in normal
+// coordinates on the linear tissue: normal_loop.h) for one frame from each unit state with the
+// device held still (x_h = 0); the analysis cannot disagree with the devices about timing, the
+// hold, the gain blend or anything else between the local model and the device. The
+// frame-boundary state, for m contacts, is
 //   X = [x_o(j-1), x_o(j-2), F((j-1)N), F((j-2)N), s(jN)]      (s only for the PI variants),
 // of which x_o(j-2) and the forces are pure delays for some variants: they add zero poles only.
 //
@@ -35,22 +37,15 @@
 #include "haptics/devices.h"
 #include "haptics/hold.h"
 #include "haptics/local_model.h"
-#include "haptics/multirate_loop.h"
+#include "haptics/normal_loop.h"
 
 namespace fetouch::haptics {
 
-struct LoopParameters {
-  LocalModelKind local_model = LocalModelKind::p;
-  HoldKind hold = HoldKind::zoh;
-  int ratio = 50;                  // N
-  Eigen::MatrixXd stiffness;       // K0, m x m
-  Eigen::MatrixXd damping;         // B0, m x m
-  LocalModelGains gains;           // Kh, I
-  Eigen::MatrixXd compliance;      // W for the Smith variants; empty: K0^-1
+// The loop (normal_loop.h: model, hold, N, K0, B0, gains, W, T) and who holds its devices.
+struct LoopParameters : NormalLoopParameters {
   // The hand holding each contact's device, or none (the device held still: the proof without the
   // hand); period_s is T, which the hand's dynamics need.
   std::optional<HandParameters> hand;
-  double period_s = 1e-3;
 
   static LoopParameters scalar(LocalModelKind kind, HoldKind hold, int ratio, double k0, double b0,
                                double kh, double integral = 0);
@@ -64,7 +59,8 @@ struct StabilityResult {
 };
 
 // The lockstep loop these parameters describe, at rest; W defaults to the environment's K0^-1.
-MultirateLoop make_loop(const LoopParameters& parameters);
+// (The hand is not part of it: whoever drives it moves the device.)
+NormalLoop make_loop(const LoopParameters& parameters);
 
 StabilityResult analyse(const LoopParameters& parameters);
 

@@ -24,7 +24,7 @@ double settling_time(const std::vector<double>& y, double final_value, double pe
 StepResponse simulate_step(const LoopParameters& p, double period_s, double duration_s) {
   if (p.stiffness.rows() != 1) throw std::invalid_argument("simulate_step: one contact only");
   const double k0 = p.stiffness(0, 0), kh = p.gains.proportional;
-  MultirateLoop loop = make_loop(p);
+  NormalLoop loop = make_loop(p);
 
   StepResponse r;
   r.period_s = period_s;

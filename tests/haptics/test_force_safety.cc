@@ -65,6 +65,25 @@ TEST(ForceSafety, WatchdogFadesLinearlyToZero) {
   EXPECT_EQ(safety.watchdog_ticks(), 3u);
 }
 
+// A stopping session's ramp out: with R = 4 a steady 0.8 N request is sent as 0.6, 0.4, 0.2, 0
+// (h = 1 - (k - k0 + 1) / R), then stays 0; asking again restarts nothing.
+TEST(ForceSafety, RampOutFadesLinearlyToZeroAndStaysThere) {
+  ForceSafety safety(limits());
+  const Eigen::Vector3d f(0, 0.8, 0);
+  EXPECT_NEAR(safety.filter(f, 0.0).y(), 0.8, 1e-12);
+  EXPECT_FALSE(safety.ramping_out());
+  safety.ramp_out(4);
+  EXPECT_TRUE(safety.ramping_out());
+  for (double expected : {0.6, 0.4, 0.2}) {
+    EXPECT_NEAR(safety.filter(f, 0.0).y(), expected, 1e-12);
+    EXPECT_FALSE(safety.ramped_out());
+    safety.ramp_out(100);
+  }
+  EXPECT_EQ(safety.filter(f, 0.0).norm(), 0.0);
+  EXPECT_TRUE(safety.ramped_out());
+  EXPECT_EQ(safety.filter(Eigen::Vector3d(2, 0, 0), 0.0).norm(), 0.0);
+}
+
 TEST(ForceSafety, InvariantsHoldOnRandomRequests) {
   ForceSafety safety(limits());
   std::mt19937 rng(7);

@@ -6,7 +6,7 @@
 #include <random>
 
 #include "haptics/gain_selection.h"
-#include "haptics/multirate_loop.h"
+#include "haptics/normal_loop.h"
 #include "haptics/scalar_loop.h"
 #include "haptics/stability_analysis.h"
 
@@ -171,7 +171,7 @@ TEST(GainSelection, CoupledPairIsTunedOnItsSoftMode) {
     const auto p = coupled_pair(g.gains, s);
     EXPECT_LT(analyse(p).spectral_radius, 1.0) << s;
     // And a lockstep run of the pair, one contact pushed for a frame, decays.
-    MultirateLoop loop = make_loop(p);
+    NormalLoop loop = make_loop(p);
     const Eigen::VectorXd push = Eigen::VectorXd::Unit(2, 0), still = Eigen::VectorXd::Zero(2);
     for (int k = 0; k < 50; ++k) loop.tick(push);
     double late = 0;

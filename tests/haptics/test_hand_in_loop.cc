@@ -24,7 +24,7 @@ HandParameters one_mass(double mass, double stiffness, double damping) {
   return hand;
 }
 
-// The general lifting (the Eigen loop of multirate_loop.h with the hand stepped beside it) and the
+// The general lifting (the devices' loop, normal_loop.h, with the hand stepped beside it) and the
 // scalar tick recurrence are two implementations of one map: their radii agree for every local
 // model, hold, ratio and hand model.
 TEST(HandInTheLoop, LiftingAgreesWithTheScalarRecurrence) {
@@ -108,7 +108,7 @@ TEST(HandInTheLoop, VerdictMatchesTheOperatorPressingTheLinearLoop) {
     HandEvent impact;
     impact.kind = HandEventKind::impact, impact.at_s = 0, impact.speed_m_per_s = 1e-3;
     VirtualOperator hand(still, c.hand, kPeriod, {impact});
-    MultirateLoop loop = make_loop(p);
+    NormalLoop loop = make_loop(p);
     Eigen::VectorXd device(1);
     double early = 0, late = 0;
     for (long k = 0; k < ticks; ++k) {
@@ -155,7 +155,9 @@ TEST(HandInTheLoop, GainsSelectedWithTheDesignHandAreStableWithIt) {
       p.hand = hand;
       return analyse(p).spectral_radius;
     };
-    if (kind != LocalModelKind::p) EXPECT_GT(radius_with_hand(still.gains, 1.0), 1.0);  // PI, PI + Smith ring it
+    if (kind != LocalModelKind::p) {
+      EXPECT_GT(radius_with_hand(still.gains, 1.0), 1.0);  // PI, PI + Smith ring it
+    }
     for (double scale : {0.7, 0.85, 1.0, 1.15, 1.3}) {
       EXPECT_LT(radius_with_hand(designed.gains, scale), 1.0) << "scale " << scale;
       LoopParameters p = LoopParameters::scalar(kind, hold, 50, scale * 23840, 0, designed.gains.proportional, designed.gains.integral);

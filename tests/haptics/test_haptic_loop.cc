@@ -12,7 +12,7 @@
 #include "haptics/contact_frame.h"
 #include "haptics/haptic_loop.h"
 #include "haptics/linear_surface_environment.h"
-#include "haptics/multirate_loop.h"
+#include "haptics/normal_loop.h"
 #include "haptics/stability_analysis.h"
 
 namespace fetouch::haptics {
@@ -52,9 +52,12 @@ TEST(ContactFrame, QuadricMatchesASphereToFourthOrder) {
     }
 }
 
-// Two contacts on differently oriented surfaces of a coupled tissue, B0 = 0.2 K0: projected on the
-// normals it is the scalar multirate loop with K_n = (N' K0^-1 N)^-1 and B_n = 0.2 K_n. With fixed
-// gains, the 3D loop's normal forces equal the normal-coordinate loop's for every model and hold.
+// Two contacts on differently oriented surfaces of a coupled, anisotropic tissue, B0 = 0.2 K0:
+// projected on the normals it is the loop in normal coordinates (normal_loop.h: contacts on one
+// plane, the tissue given along the normals only) with K_n = (N' K0^-1 N)^-1 and B_n = 0.2 K_n.
+// With fixed gains, the 3D loop's normal forces equal those of the loop the analysis lifts, for
+// every model and hold: the orientation, the tangential wander and the tangential stiffness do not
+// enter.
 TEST(HapticLoop, ProjectsOntoTheNormalCoordinateLoop) {
   const Eigen::Vector3d n0 = Eigen::Vector3d(0, 0, 1), n1 = Eigen::Vector3d(0.6, 0, 0.8);
   std::vector<ContactFrame> rest(2);
@@ -86,7 +89,7 @@ TEST(HapticLoop, ProjectsOntoTheNormalCoordinateLoop) {
       p.local_model = kind, p.hold = hold, p.ratio = 50, p.stiffness = kn, p.damping = 0.2 * kn;
       p.gains = settings.gains;
       p.compliance = wn;
-      MultirateLoop scalar = make_loop(p);
+      NormalLoop scalar = make_loop(p);
 
       std::vector<Eigen::Vector3d> devices(2);
       Eigen::VectorXd depth(2);
@@ -106,7 +109,7 @@ TEST(HapticLoop, ProjectsOntoTheNormalCoordinateLoop) {
           EXPECT_NEAR((out[c].force - out[c].normal_force * rest[c].normal).norm(), 0, 1e-9);
         }
       }
-      // Round-off only: the two loops add the same terms in different orders.
+      // Round-off only: the two geometries add the same terms in different orders.
       EXPECT_LT(worst, 1e-10 * largest) << static_cast<int>(kind) << "/" << static_cast<int>(hold);
       EXPECT_GT(largest, 0.5);
     }

@@ -6,7 +6,7 @@
 #include <cmath>
 #include <random>
 
-#include "haptics/multirate_loop.h"
+#include "haptics/normal_loop.h"
 #include "haptics/stability_analysis.h"
 
 namespace fetouch::haptics {
@@ -75,7 +75,7 @@ TEST(ClosedForms, PiZohJuryInequalitiesOfTheArchitecturePage) {
 double simulated_growth(const LoopParameters& p, int frames) {
   // The largest force over frames 5..9 against the largest over the last five.
   const int m = static_cast<int>(p.stiffness.rows());
-  MultirateLoop loop = make_loop(p);
+  NormalLoop loop = make_loop(p);
   const Eigen::VectorXd still = Eigen::VectorXd::Zero(m);
   // Disturb: the device presses for one frame, then holds still at 0.
   for (int k = 0; k < p.ratio; ++k) loop.tick(Eigen::VectorXd::Ones(m));
@@ -203,7 +203,7 @@ struct StepResponse {
   double force, surface;
 };
 StepResponse final_values(const LoopParameters& p, int frames) {
-  MultirateLoop loop = make_loop(p);
+  NormalLoop loop = make_loop(p);
   const Eigen::VectorXd step = Eigen::VectorXd::Ones(1);
   double force = 0;
   for (int k = 0; k < frames * p.ratio; ++k) force = loop.tick(step)(0);
@@ -246,6 +246,51 @@ TEST(CoupledContacts, EachAloneStableThePairNot) {
   // The soft mode (eigenvalue 0.2 of K0) has pole -Kh/0.2 = -1.5.
   EXPECT_NEAR(r.spectral_radius, 1.5, 1e-9);
   EXPECT_GT(simulated_growth(pair, 40), 1e3);
+}
+
+// The lifting holds the devices' loop's whole state: after any history (a device that wanders for
+// a few frames, then stays still), the state read at consecutive frame boundaries of the running
+// loop obeys X(j+1) = Phi X(j) for every local model and hold, two coupled contacts, a tissue that
+// damps and a predictor whose model is off. A state the lifting missed (a slot, the tissue's
+// memory) would break this after the wander.
+TEST(Lifting, PredictsTheRunningLoopFrameByFrame) {
+  Eigen::MatrixXd k0(2, 2), w(2, 2);
+  k0 << 1.0, -0.3, -0.3, 0.8;
+  w = 1.1 * k0.inverse();  // the predictor's model 10 % off
+  for (LocalModelKind kind : {LocalModelKind::p, LocalModelKind::pi, LocalModelKind::smith, LocalModelKind::pi_smith})
+    for (HoldKind hold : {HoldKind::zoh, HoldKind::foh}) {
+      LoopParameters p;
+      p.local_model = kind, p.hold = hold, p.ratio = 20;
+      p.stiffness = k0, p.damping = 0.2 * k0, p.compliance = w;
+      p.gains = {has_predictor(kind) ? 1.5 : 0.4, has_integrator(kind) ? 0.3 / 20 : 0.0};
+      const StabilityResult lifted = analyse(p);
+      NormalLoop loop(p);
+      Eigen::VectorXd device(2);
+      const int m = 2, size = (has_integrator(kind) ? 5 : 4) * m;
+      const auto state = [&] {
+        FrameBoundary b;
+        loop.frame_boundary(b);
+        Eigen::VectorXd x(size);
+        x << b.answer_depth, b.newest_depth, b.answer_force, b.newest_force;
+        if (has_integrator(kind)) x.tail(m) = b.integrator;
+        return x;
+      };
+      for (int k = 0; k < 5 * p.ratio; ++k) {  // the wander
+        device << 0.5 * std::sin(0.07 * k), 0.3 * std::cos(0.11 * k);
+        loop.tick(device);
+      }
+      device.setZero();
+      double worst = 0, largest = 0;
+      for (int j = 0; j < 6; ++j) {
+        const Eigen::VectorXd before = state();
+        for (int i = 0; i < p.ratio; ++i) loop.tick(device);
+        const Eigen::VectorXd after = state(), predicted = lifted.monodromy * before;
+        worst = std::max(worst, (after - predicted).cwiseAbs().maxCoeff());
+        largest = std::max(largest, after.cwiseAbs().maxCoeff());
+      }
+      EXPECT_GT(largest, 1e-3);
+      EXPECT_LT(worst, 1e-12 * std::max(1.0, largest)) << to_string(kind) << " " << static_cast<int>(hold);
+    }
 }
 
 }  // namespace
