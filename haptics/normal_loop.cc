@@ -51,6 +51,7 @@ HapticLoopSettings settings_for(const NormalLoopParameters& p) {
   s.schedule_gains = false;
   s.unilateral = false;
   s.passivity.mode = PassivityMode::off;
+  s.identification.enabled = false;  // nothing here reads it, and it does not shape the force
   s.safety.max_force_n = 1e300;
   s.safety.max_force_rate_n_per_s = 1e300;
   s.safety.period_s = p.period_s;
