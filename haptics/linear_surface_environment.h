@@ -32,7 +32,6 @@ class LinearSurfaceEnvironment final : public Environment {
   void set_reported_compliance(const Eigen::MatrixXd& compliance);
 
   // The frame-rate law's memory: the displacement u (3m) of the last answer, which B0 damps against.
-  const Eigen::VectorXd& displacement() const { return law_.surface(); }
   void set_displacement(const Eigen::VectorXd& u) { law_.set_surface(u); }
 
  private:

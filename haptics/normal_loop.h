@@ -63,8 +63,6 @@ class NormalLoop {
   void frame_boundary(FrameBoundary& out) const { loop_.frame_boundary(out); }
   void set_frame_boundary(const FrameBoundary& state);
 
-  HapticLoop& loop() { return loop_; }
-
  private:
   const Eigen::VectorXd& finish(const std::vector<ContactOutput>& out);
 
