@@ -271,7 +271,8 @@ TEST(Lifting, PredictsTheRunningLoopFrameByFrame) {
         FrameBoundary b;
         loop.frame_boundary(b);
         Eigen::VectorXd x(size);
-        x << b.answer_depth, b.newest_depth, b.answer_force, b.newest_force;
+        x.segment(0, m) = b.answer_depth, x.segment(m, m) = b.newest_depth;
+        x.segment(2 * m, m) = b.answer_force, x.segment(3 * m, m) = b.newest_force;
         if (has_integrator(kind)) x.tail(m) = b.integrator;
         return x;
       };
