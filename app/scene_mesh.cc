@@ -45,6 +45,9 @@ std::string cache_key(const config::MeshSpec& spec) {
     key << "phantom|" << spec.phantom.seed << '|' << spec.phantom.spacing_m;
     const auto& o = spec.phantom.fetus_offset_m;
     if (o[0] != 0 || o[1] != 0 || o[2] != 0) key << "|fetus+" << o[0] << ',' << o[1] << ',' << o[2];
+    if (const auto& pose = spec.phantom.pose)
+      key << "|pose " << config::to_string(pose->lie) << ',' << config::to_string(pose->presentation) << ','
+          << config::to_string(pose->back) << ',' << config::to_string(pose->head_side);
   } else if (fs::is_regular_file(spec.path, ec)) {
     key << fs::absolute(spec.path).string() << '|';
     key << fs::file_size(spec.path, ec) << '|' << fs::last_write_time(spec.path, ec).time_since_epoch().count();
@@ -78,11 +81,8 @@ void mesh_into(const config::MeshSpec& spec, const fs::path& file) {
   imaging::Volume<float> volume;
   if (spec.source == config::MeshSource::phantom) {
     log::info() << "meshing the scene's phantom (seed " << spec.phantom.seed << "; once, cached as " << file.string() << ")";
-    imaging::PhantomSettings p;
-    p.seed = static_cast<std::uint32_t>(spec.phantom.seed);
-    p.spacing_mm = spec.phantom.spacing_m * 1e3;
+    imaging::PhantomSettings p = phantom_settings(spec.phantom);
     p.speckle = false;  // only the labels are meshed
-    for (int d = 0; d < 3; ++d) p.fetus_offset_mm[d] = spec.phantom.fetus_offset_m[d] * 1e3;
     const imaging::Phantom phantom = imaging::make_phantom(p);
     const auto& l = phantom.labels;
     volume.dimensions = l.dimensions, volume.spacing_mm = l.spacing_mm, volume.origin_mm = l.origin_mm;
@@ -139,6 +139,21 @@ meshes::MaskVolume label_map(const imaging::Volume<float>& volume) {
   for (std::size_t i = 0; i < volume.data.size(); ++i)
     out.data[i] = static_cast<std::uint8_t>(std::clamp(std::lround(volume.data[i]), 0L, 255L));
   return out;
+}
+
+imaging::PhantomSettings phantom_settings(const config::PhantomSource& source) {
+  imaging::PhantomSettings p;
+  p.seed = static_cast<std::uint32_t>(source.seed);
+  p.spacing_mm = source.spacing_m * 1e3;
+  for (int d = 0; d < 3; ++d) p.fetus_offset_mm[d] = source.fetus_offset_m[d] * 1e3;
+  p.fetus_orientation = phantom_orientation(source.pose);
+  return p;
+}
+
+std::optional<imaging::PhantomSettings::Orientation> phantom_orientation(const std::optional<config::FetalPose>& pose) {
+  if (!pose) return std::nullopt;
+  const config::FetalAxes axes = config::fetal_axes(*pose);
+  return imaging::PhantomSettings::Orientation{axes.head, axes.back};
 }
 
 fs::path mesh_cache_dir() {

@@ -12,6 +12,7 @@
 #include <string>
 
 #include "config/scene.h"
+#include "imaging/phantom.h"
 #include "imaging/segmentation.h"
 #include "meshes/volume_mesher.h"
 
@@ -33,6 +34,13 @@ config::MeshSpec mesh_scene_volume(const config::Scene& scene);
 // otherwise. Throws std::runtime_error naming the scene and the trajectory that cannot be read, or
 // saying that no probe has a trajectory.
 config::MeshSpec resolved_mesh_spec(const config::Scene& scene);
+
+// The phantom a scene's mesh.phantom describes (seed, spacing, fetus offset and pose; speckle on):
+// the mesher takes its labels, the trainer's ultrasound its image.
+imaging::PhantomSettings phantom_settings(const config::PhantomSource& source);
+// The fetus's head and back directions for a pose (config/fetal_pose.h); none for none (the seed's
+// fetus).
+std::optional<imaging::PhantomSettings::Orientation> phantom_orientation(const std::optional<config::FetalPose>& pose);
 
 std::filesystem::path mesh_cache_dir();
 // Where the mesh of a volume or phantom spec is cached (whether it is there yet or not).

@@ -12,6 +12,8 @@
 #include <utility>
 #include <vector>
 
+#include "config/fetal_pose.h"
+
 namespace fetouch::config {
 
 using Vec3 = std::array<double, 3>;
@@ -78,6 +80,10 @@ struct PhantomSource {
   int seed = 1;
   double spacing_m = 1e-3;
   Vec3 fetus_offset_m{0, 0, 0};  // the fetus moved from where the seed puts it
+  // How the fetus lies (config/fetal_pose.h); none: where and how the seed puts it (the phantom
+  // before poses, kept so that its meshes and figures stay as they were). `lie: random` is drawn
+  // from the seed when the scene is read.
+  std::optional<FetalPose> pose;
 };
 
 struct MeshSpec {

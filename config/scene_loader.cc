@@ -26,7 +26,6 @@ std::string format_number(double value) {
   return out.str();
 }
 
-
 // Reports each key of `keys` present in `map` as not used in the situation `why` describes.
 void reject_keys(MapView& map, const std::vector<std::string>& keys, const std::string& why) {
   for (const auto& key : keys) {
@@ -63,6 +62,31 @@ const Choices<SmoothingFilter> kFilters{{"none", SmoothingFilter::none},
 
 
 // ---- mesh ---------------------------------------------------------------------------------------
+
+// mesh.phantom's pose keys (config/fetal_pose.h, requested_pose): none, the seed's fetus as it
+// always was; `lie` alone, that lie's usual presentation and back; `lie: random`, a pose drawn from
+// the seed.
+void read_fetal_pose(MapView& phantom, PhantomSource& out) {
+  const std::vector<std::string> keys{"lie", "presentation", "back", "head_side"};
+  const std::vector<const std::vector<std::string>*> names{&requested_lie_names(), &presentation_names(), &back_names(),
+                                                         &side_names()};
+  std::array<std::string, 4> given;
+  bool any = false, known = true;
+  for (std::size_t k = 0; k < keys.size(); ++k) {
+    if (!phantom.has(keys[k])) continue;
+    any = true;
+    Choices<std::string> choices;
+    for (const auto& name : *names[k]) choices.emplace_back(name, name);
+    known = phantom.choice(keys[k], given[k], choices) && known;
+  }
+  if (!any || !known) return;
+  try {
+    out.pose = requested_pose(given[0], given[1], given[2], given[3], static_cast<std::uint32_t>(out.seed));
+  } catch (const PoseError& e) {
+    const Entry where = phantom.entry(phantom.has(e.key()) ? e.key() : "lie");
+    phantom.reader().error(where.value_mark, where.path, e.what());
+  }
+}
 
 void read_generated(MapView& parent, GeneratedMesh& out) {
   const Entry e = parent.entry("generate");
@@ -253,12 +277,14 @@ void read_mesh(MapView& scene, MeshSpec& out) {
   } else if (map.has("phantom")) {
     out.source = MeshSource::phantom;
     const Entry p = map.entry("phantom");
-    MapView phantom(map.reader(), p.value, p.path, p.key_mark, {"seed", "spacing_m", "fetus_offset_m"});
+    MapView phantom(map.reader(), p.value, p.path, p.key_mark,
+                    {"seed", "spacing_m", "fetus_offset_m", "lie", "presentation", "back", "head_side"});
     if (phantom.valid()) {
       phantom.integer("seed", out.phantom.seed, {0, 2147483647});
       phantom.number("spacing_m", out.phantom.spacing_m, {2.5e-4, 5e-3, false, false});
       phantom.vec3("fetus_offset_m", out.phantom.fetus_offset_m, Need::optional,
                    {-0.05, 0.05, false, false, "-0.05 to 0.05 m: the sac is about 0.1 m across"});
+      read_fetal_pose(phantom, out.phantom);
     }
   } else {
     out.source = MeshSource::generated;

@@ -37,8 +37,20 @@ Vec rotate_z(const Vec& x, double angle) {
 
 Vec add(const Vec& a, const Vec& b) { return {a[0] + b[0], a[1] + b[1], a[2] + b[2]}; }
 
+// R^T x for a row-major rotation R.
+Vec transpose_times(const std::array<double, 9>& r, const Vec& x) {
+  return {r[0] * x[0] + r[3] * x[1] + r[6] * x[2], r[1] * x[0] + r[4] * x[1] + r[7] * x[2],
+          r[2] * x[0] + r[5] * x[1] + r[8] * x[2]};
+}
+
+Vec times(const std::array<double, 9>& r, const Vec& x) {
+  return {r[0] * x[0] + r[1] * x[1] + r[2] * x[2], r[3] * x[0] + r[4] * x[1] + r[5] * x[2],
+          r[6] * x[0] + r[7] * x[1] + r[8] * x[2]};
+}
+
 bool inside(const PhantomGeometry::Ellipsoid& e, const Vec& x, double shrink = 0) {
-  const Vec local = rotate_z({x[0] - e.centre[0], x[1] - e.centre[1], x[2] - e.centre[2]}, -e.yaw);
+  const Vec offset{x[0] - e.centre[0], x[1] - e.centre[1], x[2] - e.centre[2]};
+  const Vec local = e.axes ? transpose_times(*e.axes, offset) : rotate_z(offset, -e.yaw);
   double sum = 0;
   for (int d = 0; d < 3; ++d) {
     const double r = e.radii[d] - shrink;
@@ -91,7 +103,8 @@ std::uint8_t PhantomGeometry::label_at(const std::array<double, 3>& x) const {
   return kAmnioticFluid;
 }
 
-PhantomGeometry phantom_geometry(std::uint32_t seed, const std::array<double, 3>& fetus_offset_mm) {
+PhantomGeometry phantom_geometry(std::uint32_t seed, const std::array<double, 3>& fetus_offset_mm,
+                                 const std::optional<PhantomSettings::Orientation>& orientation) {
   Dice dice(seed);
   const auto jitter = [&](double value, double relative) { return value * dice.uniform(1 - relative, 1 + relative); };
   PhantomGeometry g;
@@ -100,33 +113,68 @@ PhantomGeometry phantom_geometry(std::uint32_t seed, const std::array<double, 3>
   const double wall = jitter(7, 0.1);
   g.uterus_inner = g.uterus_outer;
   for (double& r : g.uterus_inner.radii) r -= wall;
-  // The fetus in its own frame (x head-wards), turned by `yaw` and placed in the sac.
+  // The fetus in its own frame: x head-wards, z towards its back (the limbs reach forward, -z).
   const double yaw = dice.uniform(-0.35, 0.35);
   Vec centre{dice.uniform(-6, 2), dice.uniform(-4, 4), dice.uniform(-6, 0)};
   for (int d = 0; d < 3; ++d) centre[d] += fetus_offset_mm[d];
-  const auto place = [&](const Vec& local) { return add(centre, rotate_z(local, yaw)); };
-  g.trunk.radii = {jitter(27, 0.08), jitter(15, 0.08), jitter(14, 0.08)};
-  g.trunk.centre = place({-10, 0, 0});
-  g.trunk.yaw = yaw;
-  g.head.radii = {jitter(18, 0.06), jitter(16, 0.06), jitter(17, 0.06)};
-  g.head.centre = place({-10 + g.trunk.radii[0] + g.head.radii[0] - 5, 0, 3});
-  g.head.yaw = yaw;
+  PhantomGeometry::Ellipsoid trunk, head;
+  trunk.radii = {jitter(27, 0.08), jitter(15, 0.08), jitter(14, 0.08)};
+  trunk.centre = {-10, 0, 0};
+  head.radii = {jitter(18, 0.06), jitter(16, 0.06), jitter(17, 0.06)};
+  head.centre = {-10 + trunk.radii[0] + head.radii[0] - 5, 0, 3};
   g.skull_thickness_mm = jitter(3, 0.1);
   // Arms from the shoulders forward and down, legs from the hips folded forward.
   const double r = jitter(4.5, 0.1);
-  const Vec shoulders{-10 + 0.6 * g.trunk.radii[0], 0, 0}, hips{-10 - 0.7 * g.trunk.radii[0], 0, 0};
-  const double side = g.trunk.radii[1] * 0.7;
-  g.limbs[0] = {place({shoulders[0], side, 0}), place({shoulders[0] + dice.uniform(2, 10), side + 6, dice.uniform(-20, -14)}), r};
-  g.limbs[1] = {place({shoulders[0], -side, 0}), place({shoulders[0] + dice.uniform(2, 10), -side - 6, dice.uniform(-20, -14)}), r};
-  g.limbs[2] = {place({hips[0], side, 0}), place({hips[0] + dice.uniform(8, 16), side + 5, dice.uniform(-22, -16)}), 1.2 * r};
-  g.limbs[3] = {place({hips[0], -side, 0}), place({hips[0] + dice.uniform(8, 16), -side - 5, dice.uniform(-22, -16)}), 1.2 * r};
+  const Vec shoulders{-10 + 0.6 * trunk.radii[0], 0, 0}, hips{-10 - 0.7 * trunk.radii[0], 0, 0};
+  const double side = trunk.radii[1] * 0.7;
+  std::array<PhantomGeometry::Capsule, 4> limbs;
+  limbs[0] = {{shoulders[0], side, 0}, {shoulders[0] + dice.uniform(2, 10), side + 6, dice.uniform(-20, -14)}, r};
+  limbs[1] = {{shoulders[0], -side, 0}, {shoulders[0] + dice.uniform(2, 10), -side - 6, dice.uniform(-20, -14)}, r};
+  limbs[2] = {{hips[0], side, 0}, {hips[0] + dice.uniform(8, 16), side + 5, dice.uniform(-22, -16)}, 1.2 * r};
+  limbs[3] = {{hips[0], -side, 0}, {hips[0] + dice.uniform(8, 16), -side - 5, dice.uniform(-22, -16)}, 1.2 * r};
+
+  // Placed in the sac: by the seed alone, turned about z; or as asked, centred along its axis.
+  std::optional<std::array<double, 9>> axes;
+  Vec shift{0, 0, 0};
+  if (orientation) {
+    const Vec& a = orientation->head;
+    const Vec& b = orientation->back;
+    const double aa = a[0] * a[0] + a[1] * a[1] + a[2] * a[2], bb = b[0] * b[0] + b[1] * b[1] + b[2] * b[2];
+    const double ab = a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+    if (!(std::abs(aa - 1) < 1e-6 && std::abs(bb - 1) < 1e-6 && std::abs(ab) < 1e-6))
+      throw std::invalid_argument("phantom: the fetus's head and back directions must be unit and square to each other");
+    const Vec c{b[1] * a[2] - b[2] * a[1], b[2] * a[0] - b[0] * a[2], b[0] * a[1] - b[1] * a[0]};  // back x head
+    const std::array<double, 9> pose{a[0], c[0], b[0], a[1], c[1], b[1], a[2], c[2], b[2]};
+    // The seed's turn about z, a third of the unposed fetus's: the pose stays what was asked.
+    const double turn = yaw * (0.1 / 0.35), ct = std::cos(turn), st = std::sin(turn);
+    axes = std::array<double, 9>{};
+    for (int col = 0; col < 3; ++col) {
+      (*axes)[col] = ct * pose[col] - st * pose[3 + col];
+      (*axes)[3 + col] = st * pose[col] + ct * pose[3 + col];
+      (*axes)[6 + col] = pose[6 + col];
+    }
+    // The middle of the fetus's length (rump to crown) at the sac's centre, so that a fetus lying
+    // across the narrower sac still fits.
+    shift[0] = -0.5 * ((trunk.centre[0] - trunk.radii[0]) + (head.centre[0] + head.radii[0]));
+  }
+  const auto place = [&](const Vec& local) {
+    if (!axes) return add(centre, rotate_z(local, yaw));
+    return add(centre, times(*axes, add(local, shift)));
+  };
+  g.trunk = trunk, g.head = head;
+  for (PhantomGeometry::Ellipsoid* e : {&g.trunk, &g.head}) {
+    e->centre = place(e->centre);
+    e->yaw = axes ? 0 : yaw;
+    e->axes = axes;
+  }
+  for (int i = 0; i < 4; ++i) g.limbs[i] = {place(limbs[i].a), place(limbs[i].b), limbs[i].radius};
   return g;
 }
 
 Phantom make_phantom(const PhantomSettings& s) {
   if (!(s.spacing_mm > 0)) throw std::invalid_argument("phantom: the spacing must be positive");
   Phantom p;
-  p.geometry = phantom_geometry(s.seed, s.fetus_offset_mm);
+  p.geometry = phantom_geometry(s.seed, s.fetus_offset_mm, s.fetus_orientation);
   std::array<int, 3> n{};
   double voxels = 1;
   for (int d = 0; d < 3; ++d) {

@@ -10,11 +10,14 @@
 //     region below a bright boundary is darker.
 // Everything follows from the seed: the same seed gives the same bytes.
 //
-// Units: millimetres (an image); the volume is centred on the origin.
+// Units: millimetres (an image); the volume is centred on the origin. The uterus frame: x towards the
+// fundus (the mother's head), z anterior (the beams come down from +z), y = z × x (the mother's
+// right).
 #pragma once
 
 #include <array>
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -65,6 +68,14 @@ struct PhantomSettings {
   // The whole fetus moved by this much from where the seed puts it (a fetus lying against the
   // front wall: {0, 0, 20}). Where it then reaches the wall the wall wins: the fetus is cut off.
   std::array<double, 3> fetus_offset_mm{0, 0, 0};
+  // The fetus turned so that its head and back face these directions (unit, square to each other;
+  // config/fetal_pose.h names them as obstetrics does) and centred in the sac along its axis,
+  // within 0.1 rad about z of the request (the seed's turn). None: the seed's fetus, head towards
+  // +x turned by up to 0.35 rad about z, back towards +z, exactly as before poses existed.
+  struct Orientation {
+    std::array<double, 3> head{-1, 0, 0}, back{0, 0, 1};
+  };
+  std::optional<Orientation> fetus_orientation;
 };
 
 // The shapes, after the seed's random variation: ellipsoids (centre, semi-axes, rotation about z)
@@ -73,6 +84,8 @@ struct PhantomGeometry {
   struct Ellipsoid {
     std::array<double, 3> centre{0, 0, 0}, radii{1, 1, 1};
     double yaw = 0;  // rotation about z, rad
+    // When set, the rotation instead (row-major; column c: the ellipsoid's axis c in space).
+    std::optional<std::array<double, 9>> axes;
   };
   struct Capsule {
     std::array<double, 3> a{0, 0, 0}, b{0, 0, 0};
@@ -91,7 +104,9 @@ struct Phantom {
   Volume<std::uint8_t> image;  // 0..255
 };
 
-PhantomGeometry phantom_geometry(std::uint32_t seed, const std::array<double, 3>& fetus_offset_mm = {0, 0, 0});
+// Throws std::invalid_argument for an orientation whose directions are not unit and square.
+PhantomGeometry phantom_geometry(std::uint32_t seed, const std::array<double, 3>& fetus_offset_mm = {0, 0, 0},
+                                 const std::optional<PhantomSettings::Orientation>& orientation = std::nullopt);
 // Throws std::invalid_argument for a spacing or size that is not positive, or a volume over 2^31 voxels.
 Phantom make_phantom(const PhantomSettings& settings);
 

@@ -14,6 +14,8 @@
 #include "app/exit_codes.h"
 #include "app/output_guard.h"
 #include "app/json_writer.h"
+#include "app/scene_mesh.h"
+#include "config/fetal_pose.h"
 #include "imaging/phantom.h"
 #include "imaging/volume_io.h"
 
@@ -28,6 +30,7 @@ struct PhantomOptions {
   unsigned int seed = 1;
   double spacing_mm = 1.0;
   std::vector<double> fetus_offset_mm{0, 0, 0};
+  std::string lie, presentation, back, head_side;  // the fetal pose (config/fetal_pose.h); empty: not given
   bool no_speckle = false;
   bool json = false;
 };
@@ -53,7 +56,11 @@ int run_phantom(const PhantomOptions& o) {
   settings.speckle = !o.no_speckle;
   const auto start = std::chrono::steady_clock::now();
   imaging::Phantom phantom;
+  std::optional<config::FetalPose> pose;
   try {
+    if (!o.lie.empty() || !o.presentation.empty() || !o.back.empty() || !o.head_side.empty())
+      pose = config::requested_pose(o.lie, o.presentation, o.back, o.head_side, o.seed);
+    settings.fetus_orientation = phantom_orientation(pose);
     refuse_overwriting({}, {}, o.out);  // --out must be a folder (or not exist yet)
     phantom = imaging::make_phantom(settings);
   } catch (const std::exception& e) {
@@ -81,6 +88,16 @@ int run_phantom(const PhantomOptions& o) {
   json.key("fetus_offset_mm").begin_array();
   for (double v : o.fetus_offset_mm) json.value(v);
   json.end_array();
+  if (pose) {
+    json.key("pose").begin_object();
+    json.key("lie").value(config::to_string(pose->lie));
+    json.key("presentation").value(config::to_string(pose->presentation));
+    json.key("back").value(config::to_string(pose->back));
+    if (pose->lie != config::FetalLie::longitudinal) json.key("head_side").value(config::to_string(pose->head_side));
+    json.key("head_direction").values(settings.fetus_orientation->head);
+    json.key("back_direction").values(settings.fetus_orientation->back);
+    json.end_object();
+  }
   json.key("dimensions").begin_array();
   for (int d : phantom.image.dimensions) json.value(static_cast<long>(d));
   json.end_array();
@@ -108,6 +125,7 @@ int run_phantom(const PhantomOptions& o) {
   } else {
     std::cout << "phantom (seed " << o.seed << ", " << o.spacing_mm << " mm, " << phantom.image.dimensions[0] << " x "
               << phantom.image.dimensions[1] << " x " << phantom.image.dimensions[2] << " voxels) in " << seconds << " s\n"
+              << (pose ? "  the fetus: " + config::describe(*pose) + "\n" : std::string())
               << "  wrote " << image.string() << " and " << labels.string() << " (open in ParaView or 3D Slicer), "
               << summary.string() << "\n";
   }
@@ -124,7 +142,10 @@ void add_phantom_command(CLI::App& parent, int& exit_code) {
       "speckle, depth attenuation and shadowing, from a seed (the same seed gives the same bytes).\n"
       "Writes DIR/phantom.mha (0..255), DIR/phantom_labels.mha (0 tissue, 1 uterine wall, 2 amniotic\n"
       "fluid, 3 head, 4 skull, 5 trunk, 6 limb) and DIR/summary.json. Millimetres.\n"
-      "Example: fetouch phantom --seed 7 --spacing 0.8 --out phantom7");
+      "The fetus lies as the seed puts it, or as --lie, --presentation, --back and --head-side say\n"
+      "(the uterus frame: x towards the fundus, y the mother's right, z anterior).\n"
+      "Example: fetouch phantom --seed 7 --spacing 0.8 --out phantom7\n"
+      "         fetouch phantom --lie transverse --back superior --head-side right --out transverse");
   cmd->add_option("--out", o->out, "Output folder")->capture_default_str();
   cmd->add_option("--seed", o->seed, "Random seed")->capture_default_str();
   cmd->add_option("--spacing", o->spacing_mm, "Voxel size in mm")->check(CLI::Range(0.2, 10.0))->capture_default_str();
@@ -132,6 +153,13 @@ void add_phantom_command(CLI::App& parent, int& exit_code) {
                   "Move the fetus by X Y Z mm from where the seed puts it (each within 50 mm; the wall cuts it off where it reaches it)")
       ->expected(3)
       ->check(CLI::Range(-50.0, 50.0));
+  cmd->add_option("--lie", o->lie, "The fetus's lie (docs/meshing.md); random: the whole pose drawn from the seed")
+      ->check(CLI::IsMember(config::requested_lie_names()));
+  cmd->add_option("--presentation", o->presentation, "What lies over the pelvis (with --lie)")
+      ->check(CLI::IsMember(config::presentation_names()));
+  cmd->add_option("--back", o->back, "Where the fetal back faces (with --lie)")->check(CLI::IsMember(config::back_names()));
+  cmd->add_option("--head-side", o->head_side, "The mother's side the head lies on (transverse and oblique lies)")
+      ->check(CLI::IsMember(config::side_names()));
   cmd->add_flag("--no-speckle", o->no_speckle, "Echogenicity, attenuation and shadows only");
   cmd->add_flag("--json", o->json, "Print the JSON summary on stdout");
   cmd->callback([o, &exit_code]() { exit_code = run_phantom(*o); });

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cstdint>
 
+#include "app/scene_mesh.h"
 #include "imaging/phantom.h"
 #include "imaging/volume_io.h"
 
@@ -27,10 +28,7 @@ ReferenceVolume scene_ultrasound(const config::Scene& scene, double& gain, std::
   gain = 1;
   ReferenceVolume volume;
   if (scene.mesh.source == config::MeshSource::phantom) {
-    imaging::PhantomSettings p;
-    p.seed = static_cast<std::uint32_t>(scene.mesh.phantom.seed);
-    p.spacing_mm = scene.mesh.phantom.spacing_m * 1e3;
-    for (int d = 0; d < 3; ++d) p.fetus_offset_mm[d] = scene.mesh.phantom.fetus_offset_m[d] * 1e3;
+    const imaging::PhantomSettings p = phantom_settings(scene.mesh.phantom);
     volume = in_metres(imaging::make_phantom(p).image);
     description = "the phantom's B-mode image (seed " + std::to_string(p.seed) + ")";
   } else if (scene.mesh.source == config::MeshSource::volume) {

@@ -7,6 +7,8 @@
 #include <filesystem>
 #include <fstream>
 #include <iterator>
+#include <array>
+#include <cmath>
 #include <map>
 
 #include "imaging/volume_io.h"
@@ -38,6 +40,39 @@ TEST(PhantomCommand, WritesVolumesThatReadBackAsReported) {
   ASSERT_EQ(run_command(fetouch("phantom --spacing 2 --seed 5 --out " + (dir / "b").string())).exit_code, 0);
   EXPECT_EQ(read_file_text(dir / "a" / "phantom.mha"), read_file_text(dir / "b" / "phantom.mha"));
   EXPECT_EQ(read_file_text(dir / "a" / "phantom_labels.mha"), read_file_text(dir / "b" / "phantom_labels.mha"));
+  fs::remove_all(dir);
+}
+
+// The real binary with a pose: the label map it writes has the head's centroid on the mother's right
+// of the trunk's (a transverse lie, head right) and the limbs below the trunk (the back superior
+// faces the fundus, +x); the summary names the pose; a pose that cannot be is refused (exit 2)
+// and saying why.
+TEST(PhantomCommand, APoseIsWhereTheLabelMapPutsTheFetus) {
+  const fs::path dir = fs::temp_directory_path() / ("fetouch_phantom_pose_" + std::to_string(::getpid()));
+  const auto r = run_command(fetouch("phantom --json --no-speckle --spacing 2 --lie transverse --back superior --head-side right --out " +
+                                     dir.string()));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const YAML::Node j = YAML::Load(r.out);
+  EXPECT_EQ(j["pose"]["lie"].as<std::string>(), "transverse");
+  EXPECT_EQ(j["pose"]["presentation"].as<std::string>(), "shoulder");
+  const auto labels = imaging::read_volume(j["label_map"].as<std::string>());
+  std::map<int, std::array<double, 4>> sums;  // x, y, z, count per label (skull with the head)
+  for (int k = 0; k < labels.dimensions[2]; ++k)
+    for (int jj = 0; jj < labels.dimensions[1]; ++jj)
+      for (int i = 0; i < labels.dimensions[0]; ++i) {
+        int label = static_cast<int>(labels.data[labels.index(i, jj, k)]);
+        if (label == 4) label = 3;
+        const auto x = labels.position_mm(i, jj, k);
+        for (int d = 0; d < 3; ++d) sums[label][d] += x[d];
+        sums[label][3] += 1;
+      }
+  const auto centroid = [&](int label, int d) { return sums[label][d] / sums[label][3]; };
+  EXPECT_GT(centroid(3, 1) - centroid(5, 1), 25.0);  // head 25 mm or more to the mother's right (+y)
+  EXPECT_LT(std::abs(centroid(3, 0) - centroid(5, 0)), 10.0);
+  EXPECT_LT(centroid(6, 0) - centroid(5, 0), -4.0);  // the limbs towards the pelvis, away from the back
+  const auto bad = run_command(fetouch("phantom --lie transverse --presentation breech --out " + (dir / "bad").string()));
+  EXPECT_EQ(bad.exit_code, 2);
+  EXPECT_NE(bad.err.find("presents the shoulder"), std::string::npos) << bad.err;
   fs::remove_all(dir);
 }
 

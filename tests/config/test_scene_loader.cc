@@ -363,5 +363,78 @@ TEST(SceneLoader, PhantomFetusOffset) {
   }
 }
 
+// The fetus's pose: read by name, the lie's usual presentation and back filled in, a pose that
+// cannot be refused at its key and line, and `lie: random` drawn from the seed.
+TEST(SceneLoader, PhantomFetalPose) {
+  const std::string tail = "material: {model: neo_hookean, youngs_modulus_pa: 5000, poisson_ratio: 0.4}\n";
+  const auto read = [&](const std::string& phantom) {
+    return parse_scene("mesh:\n  phantom: {seed: 2" + phantom + "}\n" + tail, "inline", kData).scene.mesh.phantom;
+  };
+  EXPECT_FALSE(read("").pose.has_value());
+  const PhantomSource transverse = read(", lie: transverse, back: superior, head_side: right");
+  ASSERT_TRUE(transverse.pose.has_value());
+  EXPECT_EQ(transverse.pose->presentation, FetalPresentation::shoulder);
+  EXPECT_EQ(transverse.pose->back, FetalBack::superior);
+  EXPECT_EQ(transverse.pose->head_side, MaternalSide::right);
+  const PhantomSource breech = read(", lie: longitudinal, presentation: breech");
+  EXPECT_EQ(breech.pose->back, FetalBack::left_anterior);
+  for (int seed : {1, 2, 3}) {
+    const auto drawn = parse_scene("mesh: {phantom: {seed: " + std::to_string(seed) + ", lie: random}}\n" + tail, "inline", kData)
+                           .scene.mesh.phantom.pose;
+    ASSERT_TRUE(drawn.has_value());
+    const FetalPose expected = draw_pose(static_cast<std::uint32_t>(seed));
+    EXPECT_EQ(describe(*drawn), describe(expected));
+  }
+  const auto refused = [&](const std::string& phantom, const std::string& key, const std::string& words) {
+    try {
+      read(phantom);
+      ADD_FAILURE() << phantom << " was accepted";
+    } catch (const SceneError& e) {
+      EXPECT_EQ(e.diagnostics().at(0).key, "mesh.phantom." + key) << e.what();
+      EXPECT_EQ(e.diagnostics().at(0).line, 2) << e.what();
+      EXPECT_NE(e.diagnostics().at(0).message.find(words), std::string::npos) << e.what();
+    }
+  };
+  refused(", lie: transverse, presentation: cephalic", "presentation", "presents the shoulder");
+  refused(", lie: transverse, back: superior, presentation: cephalic", "presentation", "presents the shoulder");
+  refused(", lie: longitudinal, back: superior", "back", "along the fetus's own axis");
+  refused(", lie: longitudinal, head_side: left", "head_side", "no head side");
+  refused(", lie: random, back: left", "back", "draws the whole pose");
+  refused(", presentation: breech", "presentation", "starts from its lie");
+  refused(", lie: sideways", "lie", "transverse");
+}
+
+// Every valid pose: its head and back directions are unit and square, the head lies over the pelvis
+// (-x) for cephalic and in the fundus (+x) for breech, on the named side for a transverse lie, and
+// the back has a positive share along the direction named. The count follows from the rules.
+TEST(FetalPose, EveryValidPoseHasTheDirectionsItsNamesSay) {
+  const auto poses = every_pose();
+  EXPECT_EQ(poses.size(), 16u + 8u + 24u);  // longitudinal 2 x 8 backs; transverse 4 x 2 sides; oblique 2 x 6 x 2
+  for (const FetalPose& pose : poses) {
+    const FetalAxes a = fetal_axes(pose);
+    const auto dot = [](const std::array<double, 3>& u, const std::array<double, 3>& v) {
+      return u[0] * v[0] + u[1] * v[1] + u[2] * v[2];
+    };
+    EXPECT_NEAR(dot(a.head, a.head), 1, 1e-12);
+    EXPECT_NEAR(dot(a.back, a.back), 1, 1e-12);
+    EXPECT_NEAR(dot(a.head, a.back), 0, 1e-12) << describe(pose);
+    if (pose.presentation == FetalPresentation::cephalic) EXPECT_LT(a.head[0], -0.5) << describe(pose);
+    if (pose.presentation == FetalPresentation::breech) EXPECT_GT(a.head[0], 0.5) << describe(pose);
+    if (pose.lie == FetalLie::transverse) EXPECT_NEAR(a.head[1], pose.head_side == MaternalSide::right ? 1 : -1, 1e-12);
+    const std::string back = to_string(pose.back);
+    if (back.find("left") != std::string::npos) EXPECT_LT(a.back[1], -0.3) << describe(pose);
+    if (back.find("right") != std::string::npos) EXPECT_GT(a.back[1], 0.3) << describe(pose);
+    if (back.find("anterior") != std::string::npos) EXPECT_GT(a.back[2], 0.3) << describe(pose);
+    if (back.find("posterior") != std::string::npos) EXPECT_LT(a.back[2], -0.3) << describe(pose);
+    if (back == "superior") EXPECT_GT(a.back[0], 0.3) << describe(pose);
+    if (back == "inferior") EXPECT_LT(a.back[0], -0.3) << describe(pose);
+  }
+  EXPECT_THROW(fetal_axes(FetalPose{FetalLie::transverse, FetalPresentation::cephalic, FetalBack::anterior, MaternalSide::left}),
+               std::invalid_argument);
+  EXPECT_THROW(requested_pose("oblique", "", "left", "", 1), std::invalid_argument);  // 45 degrees from its axis
+  EXPECT_EQ(describe(requested_pose("transverse", "", "", "right", 1)),
+            "transverse lie, shoulder presentation, back anterior, head on the mother's right");
+}
+
 }  // namespace
 }  // namespace fetouch::config

@@ -1,7 +1,8 @@
 // The synthetic fetal phantom against what it is built from: the label volumes against the
 // ellipsoids' closed-form volumes, fully developed speckle's Rayleigh statistics (std/mean = 0.523),
 // depth attenuation exp(-mu depth), a shadow below the skull, reproducibility from the seed, and a
-// MetaImage round trip through VTK with spacing and origin kept.
+// MetaImage round trip through VTK with spacing and origin kept; and a fetus in every pose measured
+// on its label map.
 #include <gtest/gtest.h>
 #include <unistd.h>
 
@@ -12,6 +13,7 @@
 #include <fstream>
 #include <map>
 
+#include "config/fetal_pose.h"
 #include "imaging/phantom.h"
 #include "imaging/volume_io.h"
 
@@ -185,6 +187,61 @@ TEST(Phantom, BadSettingsAndFilesAreRefused) {
     EXPECT_NE(std::string(e.what()).find(path.string()), std::string::npos) << e.what();
   }
   std::filesystem::remove(path);
+}
+
+// Every pose config/fetal_pose.h allows, measured on the label map alone: the head's centroid lies
+// from the trunk's along the head direction asked, the limbs' centroid lies from the trunk's
+// (square to the fetus's axis) against the back asked (the limbs are in front), and the fetus is not
+// cut off by the wall (its volume within 5 % of the same seed's fetus lying along the sac).
+TEST(Phantom, EveryPosePutsTheHeadBackAndLimbsWhereAsked) {
+  using Vec = std::array<double, 3>;
+  const auto unit = [](Vec v) {
+    const double n = std::sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
+    return Vec{v[0] / n, v[1] / n, v[2] / n};
+  };
+  const auto dot = [](const Vec& a, const Vec& b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; };
+  for (std::uint32_t seed : {1u, 5u}) {
+    double reference_volume = 0, worst_head = 1, worst_back = 1, worst_volume = 0;
+    int measured = 0;
+    for (const config::FetalPose& pose : config::every_pose()) {
+      const config::FetalAxes axes = config::fetal_axes(pose);
+      PhantomSettings s;
+      s.seed = seed, s.spacing_mm = 2, s.speckle = false, s.shadowing = false;
+      s.fetus_orientation = PhantomSettings::Orientation{axes.head, axes.back};
+      const Phantom p = make_phantom(s);
+      std::map<int, Vec> sum;
+      std::map<int, double> count;
+      for (int k = 0; k < p.labels.dimensions[2]; ++k)
+        for (int j = 0; j < p.labels.dimensions[1]; ++j)
+          for (int i = 0; i < p.labels.dimensions[0]; ++i) {
+            int label = p.labels.data[p.labels.index(i, j, k)];
+            if (!is_fetus(static_cast<std::uint8_t>(label))) continue;
+            if (label == kSkull) label = kHead;
+            const auto x = p.labels.position_mm(i, j, k);
+            for (int d = 0; d < 3; ++d) sum[label][d] += x[d];
+            count[label] += 1;
+          }
+      ASSERT_GT(count[kHead] * count[kTrunk] * count[kLimb], 0) << config::describe(pose);
+      Vec head, trunk, limbs;
+      for (int d = 0; d < 3; ++d)
+        head[d] = sum[kHead][d] / count[kHead], trunk[d] = sum[kTrunk][d] / count[kTrunk], limbs[d] = sum[kLimb][d] / count[kLimb];
+      const Vec along = unit({head[0] - trunk[0], head[1] - trunk[1], head[2] - trunk[2]});
+      EXPECT_GT(dot(along, axes.head), std::cos(15 * M_PI / 180)) << config::describe(pose) << ", seed " << seed;
+      worst_head = std::min(worst_head, dot(along, axes.head));
+      Vec front{limbs[0] - trunk[0], limbs[1] - trunk[1], limbs[2] - trunk[2]};
+      const double share = dot(front, axes.head);
+      for (int d = 0; d < 3; ++d) front[d] -= share * axes.head[d];
+      EXPECT_LT(dot(unit(front), axes.back), -std::cos(30 * M_PI / 180)) << config::describe(pose) << ", seed " << seed;
+      worst_back = std::min(worst_back, -dot(unit(front), axes.back));
+      const double volume = count[kHead] + count[kTrunk] + count[kLimb];
+      if (measured++ == 0) reference_volume = volume;  // the first pose: longitudinal, cephalic, along the sac
+      EXPECT_NEAR(volume, reference_volume, 0.05 * reference_volume) << config::describe(pose) << ", seed " << seed;
+      worst_volume = std::max(worst_volume, std::abs(volume / reference_volume - 1));
+    }
+    EXPECT_EQ(measured, 48);
+    std::printf("seed %u: head direction within %.1f deg, back within %.1f deg, fetal volume within %.2f %% over %d poses\n", seed,
+                std::acos(worst_head) * 180 / M_PI, std::acos(worst_back) * 180 / M_PI, 100 * worst_volume, measured);
+  }
 }
 
 }  // namespace
