@@ -145,7 +145,7 @@ PhantomGeometry phantom_geometry(std::uint32_t seed, const std::array<double, 3>
       throw std::invalid_argument("phantom: the fetus's head and back directions must be unit and square to each other");
     const Vec c{b[1] * a[2] - b[2] * a[1], b[2] * a[0] - b[0] * a[2], b[0] * a[1] - b[1] * a[0]};  // back x head
     const std::array<double, 9> pose{a[0], c[0], b[0], a[1], c[1], b[1], a[2], c[2], b[2]};
-    // The seed's turn about z, a third of the unposed fetus's: the pose stays what was asked.
+    // The seed's turn about z, scaled from the unposed fetus's 0.35 rad to 0.1: the pose stays what was asked.
     const double turn = yaw * (0.1 / 0.35), ct = std::cos(turn), st = std::sin(turn);
     axes = std::array<double, 9>{};
     for (int col = 0; col < 3; ++col) {
