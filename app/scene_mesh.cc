@@ -48,6 +48,7 @@ std::string cache_key(const config::MeshSpec& spec) {
     if (const auto& pose = spec.phantom.pose)
       key << "|pose " << config::to_string(pose->lie) << ',' << config::to_string(pose->presentation) << ','
           << config::to_string(pose->back) << ',' << config::to_string(pose->head_side);
+    if (spec.phantom.gestational_age_weeks) key << "|weeks " << *spec.phantom.gestational_age_weeks;
   } else if (fs::is_regular_file(spec.path, ec)) {
     key << fs::absolute(spec.path).string() << '|';
     key << fs::file_size(spec.path, ec) << '|' << fs::last_write_time(spec.path, ec).time_since_epoch().count();
@@ -147,6 +148,7 @@ imaging::PhantomSettings phantom_settings(const config::PhantomSource& source) {
   p.spacing_mm = source.spacing_m * 1e3;
   for (int d = 0; d < 3; ++d) p.fetus_offset_mm[d] = source.fetus_offset_m[d] * 1e3;
   p.fetus_orientation = phantom_orientation(source.pose);
+  p.gestational_age_weeks = source.gestational_age_weeks;
   return p;
 }
 

@@ -84,6 +84,9 @@ struct PhantomSource {
   // before poses, kept so that its meshes and figures stay as they were). `lie: random` is drawn
   // from the seed when the scene is read.
   std::optional<FetalPose> pose;
+  // The fetus grown to this age (weeks, 14 to 42; imaging/fetal_biometry.h), the uterus with it;
+  // none: the seed's fetus, about 16 weeks.
+  std::optional<double> gestational_age_weeks;
 };
 
 struct MeshSpec {

@@ -278,13 +278,18 @@ void read_mesh(MapView& scene, MeshSpec& out) {
     out.source = MeshSource::phantom;
     const Entry p = map.entry("phantom");
     MapView phantom(map.reader(), p.value, p.path, p.key_mark,
-                    {"seed", "spacing_m", "fetus_offset_m", "lie", "presentation", "back", "head_side"});
+                    {"seed", "spacing_m", "fetus_offset_m", "lie", "presentation", "back", "head_side",
+                     "gestational_age_weeks"});
     if (phantom.valid()) {
       phantom.integer("seed", out.phantom.seed, {0, 2147483647});
       phantom.number("spacing_m", out.phantom.spacing_m, {2.5e-4, 5e-3, false, false});
       phantom.vec3("fetus_offset_m", out.phantom.fetus_offset_m, Need::optional,
                    {-0.05, 0.05, false, false, "-0.05 to 0.05 m: the sac is about 0.1 m across"});
       read_fetal_pose(phantom, out.phantom);
+      double weeks = 0;
+      if (phantom.has("gestational_age_weeks") &&
+          phantom.number("gestational_age_weeks", weeks, {14, 42, false, false, "14 to 42 weeks: Hadlock's biometry (docs/meshing.md)"}))
+        out.phantom.gestational_age_weeks = weeks;
     }
   } else {
     out.source = MeshSource::generated;

@@ -104,34 +104,36 @@ std::uint8_t PhantomGeometry::label_at(const std::array<double, 3>& x) const {
 }
 
 PhantomGeometry phantom_geometry(std::uint32_t seed, const std::array<double, 3>& fetus_offset_mm,
-                                 const std::optional<PhantomSettings::Orientation>& orientation) {
+                                 const std::optional<PhantomSettings::Orientation>& orientation, const FetalGrowth& growth) {
   Dice dice(seed);
   const auto jitter = [&](double value, double relative) { return value * dice.uniform(1 - relative, 1 + relative); };
   PhantomGeometry g;
-  g.uterus_outer.radii = {jitter(72, 0.05), jitter(56, 0.05), jitter(50, 0.05)};
+  // Grown with the fetus (every factor 1 without an age: the same numbers as always).
+  const FetalGrowth& k = growth;
+  g.uterus_outer.radii = {k.uterus * jitter(72, 0.05), k.uterus * jitter(56, 0.05), k.uterus * jitter(50, 0.05)};
   g.uterus_outer.yaw = dice.uniform(-0.1, 0.1);
   const double wall = jitter(7, 0.1);
   g.uterus_inner = g.uterus_outer;
   for (double& r : g.uterus_inner.radii) r -= wall;
   // The fetus in its own frame: x head-wards, z towards its back (the limbs reach forward, -z).
   const double yaw = dice.uniform(-0.35, 0.35);
-  Vec centre{dice.uniform(-6, 2), dice.uniform(-4, 4), dice.uniform(-6, 0)};
+  Vec centre{k.uterus * dice.uniform(-6, 2), k.uterus * dice.uniform(-4, 4), k.uterus * dice.uniform(-6, 0)};
   for (int d = 0; d < 3; ++d) centre[d] += fetus_offset_mm[d];
   PhantomGeometry::Ellipsoid trunk, head;
-  trunk.radii = {jitter(27, 0.08), jitter(15, 0.08), jitter(14, 0.08)};
-  trunk.centre = {-10, 0, 0};
-  head.radii = {jitter(18, 0.06), jitter(16, 0.06), jitter(17, 0.06)};
-  head.centre = {-10 + trunk.radii[0] + head.radii[0] - 5, 0, 3};
+  trunk.radii = {k.trunk_length * jitter(27, 0.08), k.trunk_girth * jitter(15, 0.08), k.trunk_girth * jitter(14, 0.08)};
+  trunk.centre = {-10 * k.trunk_length, 0, 0};
+  head.radii = {k.head * jitter(18, 0.06), k.head * jitter(16, 0.06), k.head * jitter(17, 0.06)};
+  head.centre = {-10 * k.trunk_length + trunk.radii[0] + head.radii[0] - 5 * k.head, 0, 3 * k.head};
   g.skull_thickness_mm = jitter(3, 0.1);
   // Arms from the shoulders forward and down, legs from the hips folded forward.
-  const double r = jitter(4.5, 0.1);
-  const Vec shoulders{-10 + 0.6 * trunk.radii[0], 0, 0}, hips{-10 - 0.7 * trunk.radii[0], 0, 0};
+  const double r = k.limbs * jitter(4.5, 0.1), l = k.limbs;
+  const Vec shoulders{-10 * k.trunk_length + 0.6 * trunk.radii[0], 0, 0}, hips{-10 * k.trunk_length - 0.7 * trunk.radii[0], 0, 0};
   const double side = trunk.radii[1] * 0.7;
   std::array<PhantomGeometry::Capsule, 4> limbs;
-  limbs[0] = {{shoulders[0], side, 0}, {shoulders[0] + dice.uniform(2, 10), side + 6, dice.uniform(-20, -14)}, r};
-  limbs[1] = {{shoulders[0], -side, 0}, {shoulders[0] + dice.uniform(2, 10), -side - 6, dice.uniform(-20, -14)}, r};
-  limbs[2] = {{hips[0], side, 0}, {hips[0] + dice.uniform(8, 16), side + 5, dice.uniform(-22, -16)}, 1.2 * r};
-  limbs[3] = {{hips[0], -side, 0}, {hips[0] + dice.uniform(8, 16), -side - 5, dice.uniform(-22, -16)}, 1.2 * r};
+  limbs[0] = {{shoulders[0], side, 0}, {shoulders[0] + l * dice.uniform(2, 10), side + 6 * l, l * dice.uniform(-20, -14)}, r};
+  limbs[1] = {{shoulders[0], -side, 0}, {shoulders[0] + l * dice.uniform(2, 10), -side - 6 * l, l * dice.uniform(-20, -14)}, r};
+  limbs[2] = {{hips[0], side, 0}, {hips[0] + l * dice.uniform(8, 16), side + 5 * l, l * dice.uniform(-22, -16)}, 1.2 * r};
+  limbs[3] = {{hips[0], -side, 0}, {hips[0] + l * dice.uniform(8, 16), -side - 5 * l, l * dice.uniform(-22, -16)}, 1.2 * r};
 
   // Placed in the sac: by the seed alone, turned about z; or as asked, centred along its axis.
   std::optional<std::array<double, 9>> axes;
@@ -174,12 +176,13 @@ PhantomGeometry phantom_geometry(std::uint32_t seed, const std::array<double, 3>
 Phantom make_phantom(const PhantomSettings& s) {
   if (!(s.spacing_mm > 0)) throw std::invalid_argument("phantom: the spacing must be positive");
   Phantom p;
-  p.geometry = phantom_geometry(s.seed, s.fetus_offset_mm, s.fetus_orientation);
+  const FetalGrowth growth = s.gestational_age_weeks ? growth_at(*s.gestational_age_weeks) : FetalGrowth{};
+  p.geometry = phantom_geometry(s.seed, s.fetus_offset_mm, s.fetus_orientation, growth);
   std::array<int, 3> n{};
   double voxels = 1;
   for (int d = 0; d < 3; ++d) {
     if (!(s.size_mm[d] > 0)) throw std::invalid_argument("phantom: the size must be positive");
-    n[d] = std::max(1, static_cast<int>(std::ceil(s.size_mm[d] / s.spacing_mm)));
+    n[d] = std::max(1, static_cast<int>(std::ceil(growth.uterus * s.size_mm[d] / s.spacing_mm)));
     voxels *= n[d];
   }
   if (voxels > std::numeric_limits<int>::max())

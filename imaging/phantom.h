@@ -21,6 +21,8 @@
 #include <string>
 #include <vector>
 
+#include "imaging/fetal_biometry.h"
+
 namespace fetouch::imaging {
 
 // A scalar volume: x fastest, then y, then z.
@@ -76,6 +78,9 @@ struct PhantomSettings {
     std::array<double, 3> head{-1, 0, 0}, back{0, 0, 1};
   };
   std::optional<Orientation> fetus_orientation;
+  // The fetus grown to this age (weeks, 14 to 42) by Hadlock's biometry (imaging/fetal_biometry.h),
+  // the uterus and the volume (size_mm) with it. None: the seed's fetus, about 16 weeks, as always.
+  std::optional<double> gestational_age_weeks;
 };
 
 // The shapes, after the seed's random variation: ellipsoids (centre, semi-axes, rotation about z)
@@ -106,7 +111,8 @@ struct Phantom {
 
 // Throws std::invalid_argument for an orientation whose directions are not unit and square.
 PhantomGeometry phantom_geometry(std::uint32_t seed, const std::array<double, 3>& fetus_offset_mm = {0, 0, 0},
-                                 const std::optional<PhantomSettings::Orientation>& orientation = std::nullopt);
+                                 const std::optional<PhantomSettings::Orientation>& orientation = std::nullopt,
+                                 const FetalGrowth& growth = {});
 // Throws std::invalid_argument for a spacing or size that is not positive, or a volume over 2^31 voxels.
 Phantom make_phantom(const PhantomSettings& settings);
 

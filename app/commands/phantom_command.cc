@@ -16,6 +16,7 @@
 #include "app/json_writer.h"
 #include "app/scene_mesh.h"
 #include "config/fetal_pose.h"
+#include "imaging/fetal_biometry.h"
 #include "imaging/phantom.h"
 #include "imaging/volume_io.h"
 
@@ -31,6 +32,7 @@ struct PhantomOptions {
   double spacing_mm = 1.0;
   std::vector<double> fetus_offset_mm{0, 0, 0};
   std::string lie, presentation, back, head_side;  // the fetal pose (config/fetal_pose.h); empty: not given
+  double weeks = 0;                                // gestational age; 0: not given (the seed's 16-week fetus)
   bool no_speckle = false;
   bool json = false;
 };
@@ -61,6 +63,7 @@ int run_phantom(const PhantomOptions& o) {
     if (!o.lie.empty() || !o.presentation.empty() || !o.back.empty() || !o.head_side.empty())
       pose = config::requested_pose(o.lie, o.presentation, o.back, o.head_side, o.seed);
     settings.fetus_orientation = phantom_orientation(pose);
+    if (o.weeks > 0) settings.gestational_age_weeks = o.weeks;
     refuse_overwriting({}, {}, o.out);  // --out must be a folder (or not exist yet)
     phantom = imaging::make_phantom(settings);
   } catch (const std::exception& e) {
@@ -96,6 +99,15 @@ int run_phantom(const PhantomOptions& o) {
     if (pose->lie != config::FetalLie::longitudinal) json.key("head_side").value(config::to_string(pose->head_side));
     json.key("head_direction").values(settings.fetus_orientation->head);
     json.key("back_direction").values(settings.fetus_orientation->back);
+    json.end_object();
+  }
+  if (settings.gestational_age_weeks) {
+    const double weeks = *settings.gestational_age_weeks;
+    json.key("gestational_age").begin_object();
+    json.key("weeks").value(weeks);
+    json.key("hadlock_biparietal_diameter_mm").value(imaging::biparietal_diameter_mm(weeks));
+    json.key("hadlock_abdominal_circumference_mm").value(imaging::abdominal_circumference_mm(weeks));
+    json.key("hadlock_femur_length_mm").value(imaging::femur_length_mm(weeks));
     json.end_object();
   }
   json.key("dimensions").begin_array();
@@ -160,6 +172,9 @@ void add_phantom_command(CLI::App& parent, int& exit_code) {
   cmd->add_option("--back", o->back, "Where the fetal back faces (with --lie)")->check(CLI::IsMember(config::back_names()));
   cmd->add_option("--head-side", o->head_side, "The mother's side the head lies on (transverse and oblique lies)")
       ->check(CLI::IsMember(config::side_names()));
+  cmd->add_option("--gestational-age", o->weeks,
+                  "Grow the fetus (and the uterus) to this age in weeks by Hadlock's biometry (without: about 16 weeks)")
+      ->check(CLI::Range(14.0, 42.0));
   cmd->add_flag("--no-speckle", o->no_speckle, "Echogenicity, attenuation and shadows only");
   cmd->add_flag("--json", o->json, "Print the JSON summary on stdout");
   cmd->callback([o, &exit_code]() { exit_code = run_phantom(*o); });

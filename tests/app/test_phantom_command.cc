@@ -70,6 +70,12 @@ TEST(PhantomCommand, APoseIsWhereTheLabelMapPutsTheFetus) {
   EXPECT_GT(centroid(3, 1) - centroid(5, 1), 25.0);  // head 25 mm or more to the mother's right (+y)
   EXPECT_LT(std::abs(centroid(3, 0) - centroid(5, 0)), 10.0);
   EXPECT_LT(centroid(6, 0) - centroid(5, 0), -4.0);  // the limbs towards the pelvis, away from the back
+  // Grown to 30 weeks: the summary gives Hadlock's measures and the volume grew with the uterus.
+  const auto grown = run_command(fetouch("phantom --json --no-speckle --spacing 4 --gestational-age 30 --out " + (dir / "30w").string()));
+  ASSERT_EQ(grown.exit_code, 0) << grown.err;
+  const YAML::Node g = YAML::Load(grown.out);
+  EXPECT_NEAR(g["gestational_age"]["hadlock_biparietal_diameter_mm"].as<double>(), 75, 3);  // about 7.5 cm at 30 weeks
+  EXPECT_GT(g["dimensions"][0].as<int>(), 2 * 40);  // 160 mm at 4 mm is 40 voxels; more than twice that
   const auto bad = run_command(fetouch("phantom --lie transverse --presentation breech --out " + (dir / "bad").string()));
   EXPECT_EQ(bad.exit_code, 2);
   EXPECT_NE(bad.err.find("presents the shoulder"), std::string::npos) << bad.err;

@@ -404,6 +404,23 @@ TEST(SceneLoader, PhantomFetalPose) {
   refused(", lie: sideways", "lie", "transverse");
 }
 
+// The fetus's age: read in weeks, refused outside Hadlock's 14 to 42 at its key and line.
+TEST(SceneLoader, PhantomGestationalAge) {
+  const std::string tail = "material: {model: neo_hookean, youngs_modulus_pa: 5000, poisson_ratio: 0.4}\n";
+  const auto s = parse_scene("mesh: {phantom: {seed: 2, gestational_age_weeks: 28}}\n" + tail, "inline", kData).scene;
+  ASSERT_TRUE(s.mesh.phantom.gestational_age_weeks.has_value());
+  EXPECT_DOUBLE_EQ(*s.mesh.phantom.gestational_age_weeks, 28);
+  EXPECT_FALSE(parse_scene("mesh: {phantom: {seed: 2}}\n" + tail, "inline", kData).scene.mesh.phantom.gestational_age_weeks);
+  try {
+    parse_scene("mesh:\n  phantom: {seed: 2, gestational_age_weeks: 10}\n" + tail, "inline", kData);
+    ADD_FAILURE() << "10 weeks was accepted";
+  } catch (const SceneError& e) {
+    EXPECT_EQ(e.diagnostics().at(0).key, "mesh.phantom.gestational_age_weeks");
+    EXPECT_EQ(e.diagnostics().at(0).line, 2);
+    EXPECT_NE(e.diagnostics().at(0).message.find("14 to 42"), std::string::npos) << e.what();
+  }
+}
+
 // Every valid pose: its head and back directions are unit and square, the head lies over the pelvis
 // (-x) for cephalic and in the fundus (+x) for breech, on the named side for a transverse lie, and
 // the back has a positive share along the direction named. The count follows from the rules.

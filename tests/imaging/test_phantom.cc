@@ -244,5 +244,52 @@ TEST(Phantom, EveryPosePutsTheHeadBackAndLimbsWhereAsked) {
   }
 }
 
+// A fetus grown to an age, measured on its label map against Hadlock's biometry (the published
+// regressions, not the phantom's own radii): the biparietal diameter (the head's width across the
+// fetus) within the seed's 6 % jitter and a voxel, the trunk's girth (the ellipse through its widths
+// across and front to back, Ramanujan's perimeter) within its 8 % and a voxel, and head and trunk
+// inside the grown sac (the ends of their axes are fluid or fetus, not wall).
+TEST(Phantom, GrowsWithGestationalAgeAsHadlockSays) {
+  const config::FetalAxes axes = config::fetal_axes(config::requested_pose("longitudinal", "cephalic", "anterior", "", 1));
+  for (double weeks : {16.0, 20.0, 28.0, 36.0}) {
+    PhantomSettings s;
+    s.spacing_mm = 2, s.speckle = false, s.shadowing = false;
+    s.fetus_orientation = PhantomSettings::Orientation{axes.head, axes.back};
+    s.gestational_age_weeks = weeks;
+    const Phantom p = make_phantom(s);
+    // The fetus's left-right axis is y here (head -x, back +z); front to back is z.
+    double head_low = 1e9, head_high = -1e9, trunk_y[2] = {1e9, -1e9}, trunk_z[2] = {1e9, -1e9};
+    for (int k = 0; k < p.labels.dimensions[2]; ++k)
+      for (int j = 0; j < p.labels.dimensions[1]; ++j)
+        for (int i = 0; i < p.labels.dimensions[0]; ++i) {
+          const int label = p.labels.data[p.labels.index(i, j, k)];
+          const auto x = p.labels.position_mm(i, j, k);
+          if (label == kHead || label == kSkull) head_low = std::min(head_low, x[1]), head_high = std::max(head_high, x[1]);
+          if (label == kTrunk) {
+            trunk_y[0] = std::min(trunk_y[0], x[1]), trunk_y[1] = std::max(trunk_y[1], x[1]);
+            trunk_z[0] = std::min(trunk_z[0], x[2]), trunk_z[1] = std::max(trunk_z[1], x[2]);
+          }
+        }
+    const double h = s.spacing_mm;
+    const double bpd = head_high - head_low + h, bpd_hadlock = biparietal_diameter_mm(weeks);
+    EXPECT_NEAR(bpd, bpd_hadlock, 0.06 * bpd_hadlock + h) << weeks << " weeks";
+    const double a = 0.5 * (trunk_y[1] - trunk_y[0] + h), b = 0.5 * (trunk_z[1] - trunk_z[0] + h);
+    const double girth = M_PI * (3 * (a + b) - std::sqrt((3 * a + b) * (a + 3 * b))), ac = abdominal_circumference_mm(weeks);
+    EXPECT_NEAR(girth, ac, 0.08 * ac + 2 * M_PI * h) << weeks << " weeks";
+    for (const PhantomGeometry::Ellipsoid* e : {&p.geometry.head, &p.geometry.trunk})
+      for (int axis = 0; axis < 3; ++axis)
+        for (double sign : {-1.0, 1.0}) {
+          std::array<double, 3> end = e->centre;
+          for (int d = 0; d < 3; ++d) end[d] += sign * 0.98 * e->radii[axis] * (*e->axes)[3 * d + axis];
+          EXPECT_GE(p.geometry.label_at(end), kAmnioticFluid) << weeks << " weeks: the sac cuts the fetus";
+        }
+    std::printf("%.0f weeks: BPD %.1f mm (Hadlock %.1f), trunk girth %.0f mm (AC %.0f), volume %d x %d x %d\n", weeks, bpd,
+                bpd_hadlock, girth, ac, p.labels.dimensions[0], p.labels.dimensions[1], p.labels.dimensions[2]);
+  }
+  PhantomSettings early;
+  early.gestational_age_weeks = 12;
+  EXPECT_THROW(make_phantom(early), std::invalid_argument);
+}
+
 }  // namespace
 }  // namespace fetouch::imaging
