@@ -61,6 +61,28 @@ Vec back_request(FetalBack back) {
 // A back within 60 degrees of the head's axis is refused (its cosine over a half).
 constexpr double kLargestAxisCosine = 0.5 + 1e-9;
 
+// The presentation and back a lie has when only the lie is named.
+FetalPose default_pose(FetalLie lie) {
+  FetalPose pose;
+  pose.lie = lie;
+  if (lie == FetalLie::transverse) pose.presentation = FetalPresentation::shoulder, pose.back = FetalBack::anterior;
+  return pose;
+}
+
+// Empty when a fetus can take the pose here, else why not.
+std::string why_invalid(const FetalPose& pose) {
+  const bool transverse = pose.lie == FetalLie::transverse, shoulder = pose.presentation == FetalPresentation::shoulder;
+  if (transverse && !shoulder)
+    return std::string("a transverse lie presents the shoulder, not ") + to_string(pose.presentation);
+  if (shoulder && !transverse)
+    return std::string("a shoulder presentation needs a transverse lie, not ") + to_string(pose.lie);
+  if (std::abs(dot(head_direction(pose), back_request(pose.back))) > kLargestAxisCosine)
+    return std::string("the back cannot face ") + to_string(pose.back) + " in a" +
+           (pose.lie == FetalLie::longitudinal ? " longitudinal" : pose.lie == FetalLie::transverse ? " transverse" : "n oblique") +
+           " lie: that is along the fetus's own axis";
+  return {};
+}
+
 }  // namespace
 
 const std::vector<std::string>& lie_names() {
@@ -101,26 +123,6 @@ bool parse(const std::string& name, FetalPresentation& out) { return parse_in(pr
 bool parse(const std::string& name, FetalBack& out) { return parse_in(back_names(), name, out); }
 bool parse(const std::string& name, MaternalSide& out) { return parse_in(side_names(), name, out); }
 
-FetalPose default_pose(FetalLie lie) {
-  FetalPose pose;
-  pose.lie = lie;
-  if (lie == FetalLie::transverse) pose.presentation = FetalPresentation::shoulder, pose.back = FetalBack::anterior;
-  return pose;
-}
-
-std::string why_invalid(const FetalPose& pose) {
-  const bool transverse = pose.lie == FetalLie::transverse, shoulder = pose.presentation == FetalPresentation::shoulder;
-  if (transverse && !shoulder)
-    return std::string("a transverse lie presents the shoulder, not ") + to_string(pose.presentation);
-  if (shoulder && !transverse)
-    return std::string("a shoulder presentation needs a transverse lie, not ") + to_string(pose.lie);
-  if (std::abs(dot(head_direction(pose), back_request(pose.back))) > kLargestAxisCosine)
-    return std::string("the back cannot face ") + to_string(pose.back) + " in a" +
-           (pose.lie == FetalLie::longitudinal ? " longitudinal" : pose.lie == FetalLie::transverse ? " transverse" : "n oblique") +
-           " lie: that is along the fetus's own axis";
-  return {};
-}
-
 FetalAxes fetal_axes(const FetalPose& pose) {
   if (const std::string why = why_invalid(pose); !why.empty()) throw std::invalid_argument(why);
   FetalAxes axes;
@@ -151,13 +153,13 @@ FetalPose draw_pose(std::uint32_t seed) {
   return poses[engine() % poses.size()];
 }
 
-FetalPose requested_pose(const std::string& lie, const std::string& presentation, const std::string& back,
-                         const std::string& head_side, std::uint32_t seed) {
+std::optional<FetalPose> requested_pose(const std::string& lie, const std::string& presentation, const std::string& back,
+                                        const std::string& head_side, std::uint32_t seed) {
   // The first of the other names given: where a name that cannot stand beside the lie is.
   const char* other = !presentation.empty() ? "presentation" : !back.empty() ? "back" : !head_side.empty() ? "head_side" : nullptr;
   if (lie.empty()) {
     if (other) throw PoseError(other, "a fetal pose starts from its lie (longitudinal, transverse, oblique or random)");
-    throw PoseError("lie", "no fetal lie given");
+    return std::nullopt;
   }
   if (lie == "random") {
     if (other) throw PoseError(other, "lie random draws the whole pose from the seed: give no presentation, back or head side with it");

@@ -19,6 +19,7 @@
 
 #include <array>
 #include <cstdint>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -53,16 +54,9 @@ bool parse(const std::string& name, FetalPresentation& out);
 bool parse(const std::string& name, FetalBack& out);
 bool parse(const std::string& name, MaternalSide& out);
 
-// The presentation and back a lie has when a scene names only the lie: cephalic and left anterior
-// (longitudinal, oblique), shoulder and anterior (transverse).
-FetalPose default_pose(FetalLie lie);
-
-// Empty when the pose is one a fetus can take here, else why not ("a transverse lie presents the
-// shoulder, not cephalic").
-std::string why_invalid(const FetalPose& pose);
-
 // The fetus's head and back directions in the uterus frame (unit, square to each other). Throws
-// std::invalid_argument with why_invalid's text for a pose that is not valid.
+// std::invalid_argument saying why for a pose a fetus cannot take (a transverse lie that does not
+// present the shoulder, or the reverse; a back within 60 degrees of the fetal axis).
 struct FetalAxes {
   std::array<double, 3> head{0, 0, 0}, back{0, 0, 0};
 };
@@ -84,11 +78,12 @@ class PoseError : public std::invalid_argument {
   const char* key_;
 };
 
-// The pose a scene or a command line asks for, by names (empty: not given): `lie` alone gives that
-// lie's usual presentation and back (default_pose), the others override them; lie "random" draws the
+// The pose a scene or a command line asks for, by names (empty: not given); none when no name is
+// given. `lie` alone gives that lie's usual presentation and back (cephalic and left_anterior, or
+// shoulder and anterior for a transverse lie), the others override them; lie "random" draws the
 // whole pose from `seed` and takes nothing else. Throws PoseError saying which name is unknown,
 // which was given without a lie or beside "random", or why the pose is not valid.
-FetalPose requested_pose(const std::string& lie, const std::string& presentation, const std::string& back,
+std::optional<FetalPose> requested_pose(const std::string& lie, const std::string& presentation, const std::string& back,
                          const std::string& head_side, std::uint32_t seed);
 
 // "transverse lie, shoulder presentation, back superior, head on the mother's left"

@@ -71,15 +71,14 @@ void read_fetal_pose(MapView& phantom, PhantomSource& out) {
   const std::vector<const std::vector<std::string>*> names{&requested_lie_names(), &presentation_names(), &back_names(),
                                                          &side_names()};
   std::array<std::string, 4> given;
-  bool any = false, known = true;
+  bool known = true;
   for (std::size_t k = 0; k < keys.size(); ++k) {
     if (!phantom.has(keys[k])) continue;
-    any = true;
     Choices<std::string> choices;
     for (const auto& name : *names[k]) choices.emplace_back(name, name);
     known = phantom.choice(keys[k], given[k], choices) && known;
   }
-  if (!any || !known) return;
+  if (!known) return;
   try {
     out.pose = requested_pose(given[0], given[1], given[2], given[3], static_cast<std::uint32_t>(out.seed));
   } catch (const PoseError& e) {

@@ -60,8 +60,7 @@ int run_phantom(const PhantomOptions& o) {
   imaging::Phantom phantom;
   std::optional<config::FetalPose> pose;
   try {
-    if (!o.lie.empty() || !o.presentation.empty() || !o.back.empty() || !o.head_side.empty())
-      pose = config::requested_pose(o.lie, o.presentation, o.back, o.head_side, o.seed);
+    pose = config::requested_pose(o.lie, o.presentation, o.back, o.head_side, o.seed);
     settings.fetus_orientation = phantom_orientation(pose);
     if (o.weeks > 0) settings.gestational_age_weeks = o.weeks;
     refuse_overwriting({}, {}, o.out);  // --out must be a folder (or not exist yet)

@@ -449,7 +449,7 @@ TEST(FetalPose, EveryValidPoseHasTheDirectionsItsNamesSay) {
   EXPECT_THROW(fetal_axes(FetalPose{FetalLie::transverse, FetalPresentation::cephalic, FetalBack::anterior, MaternalSide::left}),
                std::invalid_argument);
   EXPECT_THROW(requested_pose("oblique", "", "left", "", 1), std::invalid_argument);  // 45 degrees from its axis
-  EXPECT_EQ(describe(requested_pose("transverse", "", "", "right", 1)),
+  EXPECT_EQ(describe(*requested_pose("transverse", "", "", "right", 1)),
             "transverse lie, shoulder presentation, back anterior, head on the mother's right");
 }
 

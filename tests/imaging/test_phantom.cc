@@ -250,7 +250,7 @@ TEST(Phantom, EveryPosePutsTheHeadBackAndLimbsWhereAsked) {
 // across and front to back, Ramanujan's perimeter) within its 8 % and a voxel, and head and trunk
 // inside the grown sac (the ends of their axes are fluid or fetus, not wall).
 TEST(Phantom, GrowsWithGestationalAgeAsHadlockSays) {
-  const config::FetalAxes axes = config::fetal_axes(config::requested_pose("longitudinal", "cephalic", "anterior", "", 1));
+  const config::FetalAxes axes = config::fetal_axes(*config::requested_pose("longitudinal", "cephalic", "anterior", "", 1));
   for (double weeks : {16.0, 20.0, 28.0, 36.0}) {
     PhantomSettings s;
     s.spacing_mm = 2, s.speckle = false, s.shadowing = false;
