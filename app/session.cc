@@ -255,6 +255,8 @@ SessionSummary run_realtime(haptics::Environment& environment, std::vector<std::
   std::atomic<long> skipped{0}, dropped{0}, tick_overruns{0};
   std::atomic<bool> priority_granted{false};
   long ran = 0;  // ticks the haptic thread ran (read after it joined)
+  // Frames the solver answered otherwise than lockstep would, and the first (read after it joined).
+  long differing_frames = 0, first_differing_frame = -1;
   std::mutex frames_mutex;  // between the solver and I/O threads only
   std::vector<FrameRecord> frames;
   std::exception_ptr solver_error, io_error, haptic_error;
@@ -408,6 +410,7 @@ SessionSummary run_realtime(haptics::Environment& environment, std::vector<std::
         }
         const FrameRequest& r = requests.front();
         const haptics::FrameSlot& slot = loop.fill_answer(environment, r.samples, r.frame);
+        if (slot.update.status.differs_from_lockstep && differing_frames++ == 0) first_differing_frame = r.frame;
         timespec answered{};
         clock_gettime(CLOCK_MONOTONIC, &answered);
         const double arrived = seconds_between(origin, answered);
@@ -481,6 +484,9 @@ SessionSummary run_realtime(haptics::Environment& environment, std::vector<std::
   t.tick_overruns = tick_overruns;
   t.frame_overruns = loop.late_answers();
   t.first_late_tick = loop.first_late_tick();
+  t.solver_differences = differing_frames;
+  // That frame's answer is taken up at the next frame's start at the earliest.
+  t.first_solver_difference_tick = first_differing_frame < 0 ? -1 : (first_differing_frame + 1) * settings.loop.ratio;
   t.skipped_frames = skipped;
   t.dropped_samples = dropped;
   t.realtime_priority = priority_granted;

@@ -88,7 +88,12 @@ struct TimingSummary {
   long tick_overruns = 0;     // ticks that ended after the next tick's deadline (on a driver's
                               // clock: ticks that started over 1.5 periods after the last one)
   long frame_overruns = 0;    // frame starts at which the previous frame's answer was not there yet
-  long first_late_tick = -1;  // the tick of the first (-1: none): up to it, forces equal lockstep's
+  long first_late_tick = -1;  // the tick of the first (-1: none)
+  // Frames the environment solved otherwise than lockstep would (SolveStatus::differs_from_lockstep:
+  // a background factorisation not ready where lockstep takes it up), and the first tick that may
+  // differ because of them (-1: none). Before both first ticks the forces are lockstep's, bit for bit.
+  long solver_differences = 0;
+  long first_solver_difference_tick = -1;
   long skipped_frames = 0;    // frames whose samples a newer frame replaced before the solver took them
   long dropped_samples = 0;   // ticks the recording ring had no room for (lost from the recording)
   bool realtime_priority = false;

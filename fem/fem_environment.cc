@@ -51,6 +51,7 @@ void FemEnvironment::initial(haptics::EnvironmentUpdate& out) {
 void FemEnvironment::solve(const std::vector<haptics::ContactSample>& samples, long frame,
                            haptics::EnvironmentUpdate& out) {
   const auto start = std::chrono::steady_clock::now();
+  const int late_before = solver_->late_background_frames();  // the patch moves' solves count too
   if (anchors_.size() != samples.size())
     for (const auto& sample : samples) anchors_.push_back(sample.position);
   for (int c = 0; c < contacts() && follow_; ++c) {
@@ -117,6 +118,7 @@ void FemEnvironment::solve(const std::vector<haptics::ContactSample>& samples, l
   if (!report.steps.empty() && !report.steps.back().residuals.empty())
     out.status.residual = report.steps.back().residuals.back();
   out.status.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  out.status.differs_from_lockstep = solver_->late_background_frames() != late_before;
   out.frame = frame;
   // FETOUCH_TRACE_FRAMES=1: where each frame's time went, one line per frame on standard error.
   static const bool trace = std::getenv("FETOUCH_TRACE_FRAMES") != nullptr;

@@ -75,6 +75,9 @@ struct SolveReport {
   // One was taken up at the solve's start (its wait is in factorisation_s: background_wait_s).
   bool background_taken = false;
   double background_wait_s = 0;
+  // Real time: the one lockstep takes up here was not ready, and the solve went on without it
+  // (TangentSystem::background_late).
+  bool background_late = false;
   // Each term's own time: its assembly (part of assembly_s) and the rest of its own work (a cavity's
   // restorations and step completions, which solve with the factorisation: part of solve_s), with
   // the linear iterations that work took.

@@ -31,6 +31,8 @@ std::string describe_frame(const SolveReport& r, const ComplianceTimes& c) {
   if (r.background_taken) {
     std::snprintf(line, sizeof line, "; background factorisation taken up (waited %.1f ms)", 1e3 * r.background_wait_s);
     text += line;
+  } else if (r.background_late) {
+    text += "; background factorisation due and not ready (real time goes on without it)";
   } else if (r.background) {
     text += "; background factorisation under way";
   }
@@ -72,6 +74,7 @@ std::vector<std::string> QuasiStaticSolver::terms() const {
 }
 
 void QuasiStaticSolver::set_deterministic_factorisations(bool on) { impl_->system.tangent().set_deterministic(on); }
+int QuasiStaticSolver::late_background_frames() const { return impl_->system.tangent().late_background_frames(); }
 
 void QuasiStaticSolver::use_algebraic_multigrid(bool on) {
   impl_->method = on ? TangentSystem::Method::amg : TangentSystem::Method::factorisation;
@@ -243,6 +246,7 @@ SolveReport QuasiStaticSolver::solve(const NewtonSettings& s) {
   report.background = background || m.system.tangent().background_under_way();
   report.background_taken = taken;
   report.background_wait_s = waited;
+  report.background_late = m.system.tangent().background_late();
   const std::vector<Term*>& terms = m.driver.terms();
   for (std::size_t i = 0; i < terms.size() && i < m.driver.term_times.size(); ++i) {
     report.terms.push_back(m.driver.term_times[i]);

@@ -55,10 +55,14 @@ class QuasiStaticSolver {
   void use_algebraic_multigrid(bool on);
   // Threads assembling the elasticity (1 or 2, the default; elasticity_term.h).
   void set_assembly_threads(unsigned int threads);
-  // Whether a background factorisation is taken up at a fixed frame (true: reproducible, the
-  // default, and what lockstep replays use; real-time replays take it up when ready, and the worker
-  // then yields its core to the frames) or as soon as it is ready. tangent_system.h.
+  // Whether a background factorisation is waited for at the frame it is due (true: reproducible,
+  // the default, and what lockstep replays use) or, when not ready there, taken up at the first
+  // frame after at which it is (real time; the worker then yields its core to the frames).
+  // tangent_system.h.
   void set_deterministic_factorisations(bool on);
+  // Solves so far that went on without a due background factorisation (not deterministic): each
+  // differs from what lockstep solves within the solve's tolerance, and so may every one after it.
+  int late_background_frames() const;
   QuasiStaticSolver(QuasiStaticSolver&&) noexcept;
   QuasiStaticSolver& operator=(QuasiStaticSolver&&) noexcept;
 

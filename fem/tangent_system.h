@@ -19,7 +19,8 @@
 // factorisation: when CG needs more than refactor_after_iterations, the current K is handed to a
 // worker thread that factorises it while frames go on with the old factorisation, and the new one is
 // taken up at the start of the frame `swap_after_frames` later (waited for there if not ready, so
-// lockstep replays stay bit-reproducible; undeterministic mode takes it up as soon as it is ready).
+// lockstep replays stay bit-reproducible; undeterministic mode, real time, takes it up there if it
+// is ready and otherwise at the first frame after at which it is: background_late()).
 // A K that is not positive definite falls back to PETSc's MUMPS LDL'.
 //
 // Or, selectable (and chosen by size in the scene), CG preconditioned by algebraic multigrid
@@ -114,6 +115,11 @@ class TangentSystem {
   // CG iterations allowed on a stale factorisation while a new one is made in the background.
   int max_background_cg_iterations = 30;
   int background_factorisations() const { return background_factorisations_; }
+  // This frame went on with the old factorisation where lockstep takes up the background one (not
+  // deterministic, and that one not ready): from here the frames differ from lockstep's within the
+  // solves' tolerance, where until now they were the same bit for bit.
+  bool background_late() const { return background_late_; }
+  int late_background_frames() const { return late_background_frames_; }  // so far
   // A factorisation requested for the background and not yet taken up (on the worker, or done there).
   bool background_under_way() const { return frames_since_request_ >= 0; }
   int max_cg_iterations = 8;
@@ -158,6 +164,8 @@ class TangentSystem {
   bool in_frame_ = false, deterministic_ = true;
   bool primed_ = false;  // the worker has made its first (warm-up) factorisation for this pattern
   int frames_since_request_ = -1;  // -1: no background factorisation under way
+  bool background_late_ = false;
+  int late_background_frames_ = 0;
   int background_factorisations_ = 0;
   std::vector<double> r_, z_, p_, q_;  // CG's vectors
   std::vector<double> snapshot_;       // PETSc: the K to factorise when taken up

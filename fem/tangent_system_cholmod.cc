@@ -139,11 +139,18 @@ double TangentSystem::take_background(bool wait) {
 
 double TangentSystem::begin_frame(bool frame) {
   in_frame_ = frame && method_ == Method::factorisation;
+  background_late_ = false;
   if (frames_since_request_ < 0) return 0;
   ++frames_since_request_;
-  if (!deterministic_) return take_background(/*wait=*/false);
-  if (frames_since_request_ >= swap_after_frames || !in_frame_) return take_background(/*wait=*/true);
-  return 0;
+  // Due at the `swap_after_frames`th frame after the request (or the next solve outside frames),
+  // in both modes, so that real time solves what lockstep solves while the worker keeps up. There
+  // lockstep waits for it; real time goes on with the old factorisation and takes it up at the
+  // first frame after at which it is ready.
+  if (frames_since_request_ < swap_after_frames && in_frame_) return 0;
+  const double waited = take_background(/*wait=*/deterministic_);
+  background_late_ = frames_since_request_ >= 0;
+  late_background_frames_ += background_late_;
+  return waited;
 }
 
 // Preconditioned CG on the current K (+ c g g') with the factorisation of an earlier one (+ c g g',

@@ -28,6 +28,10 @@ struct SolveStatus {
   double residual = 0;
   double seconds = 0;
   std::string message;  // why not converged; empty otherwise
+  // The environment solved otherwise than a lockstep replay would (real time: a solver that took
+  // up a background factorisation later than lockstep does): from this answer on, the answers
+  // agree with lockstep's within the solver's tolerance rather than bit for bit.
+  bool differs_from_lockstep = false;
 };
 
 // The environment's answer for one frame.

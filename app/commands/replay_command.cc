@@ -218,6 +218,8 @@ void write_summary(std::ostream& out, const ReplayOptions& o, const config::Scen
     spread("tick_period_s", t.period_p50_s, t.period_p99_s, t.period_max_s);
     spread("tick_lateness_s", t.lateness_p50_s, t.lateness_p99_s, t.lateness_max_s);
     json.key("first_late_tick").value(t.first_late_tick);
+    json.key("solver_differences").value(t.solver_differences);
+    json.key("first_solver_difference_tick").value(t.first_solver_difference_tick);
     json.key("tick_overruns").value(t.tick_overruns);
     json.key("skipped_frames").value(t.skipped_frames);
     json.key("dropped_samples").value(t.dropped_samples);
@@ -407,10 +409,10 @@ int run_replay(const ReplayOptions& o) {
       const TimingSummary& t = summary.timing;
       const std::string core = t.haptic_core >= 0 ? ", haptic thread alone on core " + std::to_string(t.haptic_core) : "";
       std::printf("  real time%s%s: tick period p50 %.3f ms, p99 %.3f ms, max %.3f ms; lateness p99 %.1f us, max %.1f us; "
-                  "%ld late ticks; %ld frame overruns, %ld frames skipped\n",
+                  "%ld late ticks; %ld frame overruns, %ld frames skipped, %ld solved unlike lockstep\n",
                   t.realtime_priority ? " (SCHED_FIFO)" : " (normal priority)", core.c_str(), 1e3 * t.period_p50_s,
                   1e3 * t.period_p99_s, 1e3 * t.period_max_s, 1e6 * t.lateness_p99_s, 1e6 * t.lateness_max_s,
-                  t.tick_overruns, t.frame_overruns, t.skipped_frames);
+                  t.tick_overruns, t.frame_overruns, t.skipped_frames, t.solver_differences);
     }
     print_hand_summary(scene, summary);
     std::printf("  wrote %s, %s", recording.string().c_str(), (out / "summary.json").string().c_str());

@@ -76,6 +76,8 @@ void write_run_summary(std::ostream& out, const config::Scene& scene, const Sess
   json.key("late_ticks").value(t.tick_overruns);
   json.key("frame_overruns").value(t.frame_overruns);
   json.key("first_late_tick").value(t.first_late_tick);
+  json.key("solver_differences").value(t.solver_differences);
+  json.key("first_solver_difference_tick").value(t.first_solver_difference_tick);
   json.key("skipped_frames").value(t.skipped_frames);
   json.end_object();
   out << "\n";

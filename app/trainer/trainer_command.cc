@@ -97,6 +97,7 @@ int run_trainer(const TrainerCommandOptions& o) {
     json.key("late_ticks").value(s.timing.tick_overruns);
     json.key("frame_overruns").value(s.timing.frame_overruns);
     json.key("skipped_frames").value(s.timing.skipped_frames);
+    json.key("solver_differences").value(s.timing.solver_differences);
     json.key("ultrasound_asked").value(f.ultrasound_asked);
     json.key("ultrasound_images").value(f.ultrasound_images);
     json.key("ultrasound_image_ms").value(image_ms);

@@ -3,7 +3,9 @@
 // without refactoring, a matrix that is not positive definite falls back to LDL' and is still solved.
 #include <gtest/gtest.h>
 
+#include <chrono>
 #include <cmath>
+#include <thread>
 #include <vector>
 
 #include "fem/tangent_system.h"
@@ -93,6 +95,68 @@ TEST(TangentSystem, ADriftedFactorisationIsReplacedFromTheBackgroundThreeFramesL
   EXPECT_FALSE(fresh.refactored);
   EXPECT_LE(fresh.iterations, 1);
   EXPECT_LT(relative_residual(k, b, x), 1e-10);
+}
+
+// Real time (not deterministic) keeps lockstep's schedule while the worker keeps up: a background
+// factorisation that is ready early is still taken up at the third frame, never before, so the
+// frames solve what lockstep's solve. One not ready there is not waited for: that frame and each
+// after it until it is ready go on with the old factorisation and say so (background_late), and
+// it is taken up at the first frame start at which it is.
+TEST(TangentSystem, RealTimeTakesTheBackgroundFactorisationUpAtLockstepsFrameOrWhenReady) {
+  for (const int n : {200, 400000}) {
+    SCOPED_TRACE(n);
+    TangentSystem k;
+    k.set_deterministic(false);
+    ASSERT_EQ(k.swap_after_frames, 3);
+    // tridiag(-1, 3, -1) (eigenvalues in 1..5), then 10 % more on the diagonal: CG on the old
+    // factorisation has a preconditioned spectrum in 1.06..1.3, so it converges, in more than
+    // refactor_after_iterations and fewer than the frames' limit.
+    tridiagonal(k, n, 3.0);
+    std::vector<double> b(n), x(n);
+    for (int i = 0; i < n; ++i) b[i] = std::sin(0.1 * i) + 0.5;
+    k.begin_frame(true);
+    ASSERT_TRUE(k.solve(b.data(), x.data(), 1e-10, true).refactored);
+    tridiagonal(k, n, 3.3);
+    k.begin_frame(true);
+    const TangentSystem::SolveStats drifted = k.solve(b.data(), x.data(), 1e-10, false);
+    ASSERT_FALSE(drifted.refactored);
+    ASSERT_GT(drifted.iterations, k.refactor_after_iterations);
+    ASSERT_TRUE(k.background_under_way());
+    const bool slow = n > 1000;  // factorising 400,000 rows takes milliseconds; a frame start, nanoseconds
+    for (int frame = 1; frame < 3; ++frame) {
+      if (!slow) std::this_thread::sleep_for(std::chrono::milliseconds(100));  // the 200 rows are factorised by now
+      k.begin_frame(true);
+      EXPECT_EQ(k.factorisations(), 1) << "taken up before lockstep does, frame " << frame;
+      EXPECT_FALSE(k.background_late());
+    }
+    if (!slow) {
+      std::this_thread::sleep_for(std::chrono::milliseconds(100));
+      k.begin_frame(true);
+      EXPECT_FALSE(k.background_late());
+      EXPECT_EQ(k.late_background_frames(), 0);
+    } else {
+      k.begin_frame(true);
+      EXPECT_TRUE(k.background_late());
+      EXPECT_TRUE(k.background_under_way());
+      EXPECT_EQ(k.factorisations(), 1);
+      int late = 1;
+      for (int frame = 4; k.background_under_way() && frame < 10000; ++frame) {
+        std::this_thread::sleep_for(std::chrono::milliseconds(1));
+        k.begin_frame(true);
+        EXPECT_EQ(k.background_late(), k.background_under_way()) << frame;
+        late += k.background_late();
+      }
+      EXPECT_EQ(k.late_background_frames(), late);
+    }
+    EXPECT_FALSE(k.background_under_way());
+    EXPECT_EQ(k.factorisations(), 2);
+    EXPECT_EQ(k.background_factorisations(), 1);
+    // It factorised K as it was at the request, which is K now: CG against it takes one iteration.
+    const TangentSystem::SolveStats fresh = k.solve(b.data(), x.data(), 1e-10, true);
+    EXPECT_FALSE(fresh.refactored);
+    EXPECT_LE(fresh.iterations, 1);
+    EXPECT_LT(relative_residual(k, b, x), 1e-10);
+  }
 }
 
 // The blocked product against the closed form: (K x)_i = d x_i - x_{i-1} - x_{i+1} for every
