@@ -52,8 +52,10 @@ void FemEnvironment::solve(const std::vector<haptics::ContactSample>& samples, l
                            haptics::EnvironmentUpdate& out) {
   const auto start = std::chrono::steady_clock::now();
   const int late_before = solver_->late_background_frames();  // the patch moves' solves count too
-  if (anchors_.size() != samples.size())
+  if (anchors_.size() != samples.size()) {
+    anchors_.clear(), applied_.assign(samples.size(), Eigen::Vector3d::Zero());
     for (const auto& sample : samples) anchors_.push_back(sample.position);
+  }
   for (int c = 0; c < contacts() && follow_; ++c) {
     // The probe's own motion since its patch was placed, in the patch's tangent plane; the patch
     // moves by it on the reference surface. Measured from the device alone: an offset from the
@@ -71,7 +73,10 @@ void FemEnvironment::solve(const std::vector<haptics::ContactSample>& samples, l
     // the patch's whole load to a place the state knows nothing of, which no load step can cut
     // down: the patch slides there in steps of half a radius, the tissue solved under its force
     // after each, and stays at the last place a step reached if one fails.
-    const int steps = static_cast<int>(std::ceil(motion.norm() / (0.5 * radius)));
+    // A patch that carries no force, and is given none (the probe in the air), has no load to
+    // carry: it goes there at once (a hand crossing the abdomen between presses).
+    const bool unloaded = applied_[c].norm() == 0 && !(samples[c].force.norm() > 0);
+    const int steps = unloaded ? 1 : static_cast<int>(std::ceil(motion.norm() / (0.5 * radius)));
     const dealii::Point<3> from = solver_->patch_center(c);
     try {
       dealii::Point<3> reached = from;
@@ -94,6 +99,7 @@ void FemEnvironment::solve(const std::vector<haptics::ContactSample>& samples, l
     dealii::Tensor<1, 3> force;
     for (int d = 0; d < 3; ++d) force[d] = samples[c].force(d);
     solver_->set_patch_force(c, force);
+    applied_[c] = samples[c].force.allFinite() ? samples[c].force : Eigen::Vector3d::Zero();
   }
   last_report_ = solver_->solve(newton_);
   const SolveReport& report = last_report_;

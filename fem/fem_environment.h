@@ -45,6 +45,7 @@ class FemEnvironment final : public haptics::Environment {
   haptics::EnvironmentUpdate last_good_;
   bool follow_ = true;
   std::vector<Eigen::Vector3d> anchors_;  // each probe's position when its patch was last placed
+  std::vector<Eigen::Vector3d> applied_;  // the force each patch carries (the last frame's)
   long patch_moves_ = 0;
   SolveReport last_report_;
 };
