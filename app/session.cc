@@ -154,6 +154,31 @@ class SessionBase {
 
 }  // namespace
 
+namespace {
+
+// A tick's figures for the window (SessionMonitor): each device's point, proxy, force and layers'
+// state, then the tick count. No allocation: the haptic tick calls it.
+void publish_tick(SessionMonitor& monitor, long ticks_done, const std::vector<Eigen::Vector3d>& points,
+                  const std::vector<haptics::ContactOutput>& out, const DeviceSample* sent, int m) noexcept {
+  auto& probes = monitor.probes.back();
+  for (int d = 0; d < m && d < SessionMonitor::kMaxDevices; ++d) {
+    monitor.force_n[d].store(sent[d].force.norm(), std::memory_order_relaxed);
+    probes[d] = {points[d],
+                 out[d].proxy,
+                 sent[d].force,
+                 out[d].penetration,
+                 out[d].in_contact,
+                 out[d].port_energy_j,
+                 out[d].passivity_scale,
+                 out[d].identified ? out[d].identified_stiffness_n_per_m : 0.0,
+                 out[d].condensed_stiffness_n_per_m};
+  }
+  monitor.probes.publish();
+  monitor.ticks.store(ticks_done, std::memory_order_relaxed);
+}
+
+}  // namespace
+
 SessionSummary run_lockstep(haptics::Environment& environment, std::vector<std::unique_ptr<haptics::Device>>& devices,
                             const SessionSettings& settings) {
   SessionBase base(environment, devices, settings);
@@ -179,7 +204,17 @@ SessionSummary run_lockstep(haptics::Environment& environment, std::vector<std::
     filled = 0;
   };
 
+  std::vector<DeviceSample> sent(static_cast<std::size_t>(m));  // the tick's samples, for the monitor
+  bool stopped = false;
   for (long k = 0; k < ticks; ++k) {
+    // A window's pause holds simulated time; its stop ends the take (scripted devices: no hand to
+    // ramp a force out of).
+    while (settings.pause && settings.pause->load(std::memory_order_relaxed) && !(settings.stop && settings.stop->load()))
+      std::this_thread::sleep_for(std::chrono::milliseconds(5));
+    if (settings.stop && settings.stop->load(std::memory_order_relaxed)) {
+      stopped = true;
+      break;
+    }
     for (int d = 0; d < m; ++d) {
       const haptics::DeviceState state = devices[d]->read();
       points[d] = state.position_m, velocities[d] = state.velocity_m_per_s;
@@ -190,8 +225,10 @@ SessionSummary run_lockstep(haptics::Environment& environment, std::vector<std::
     for (int d = 0; d < m; ++d) {
       base.sample(k, points[d], last_points[d], out[d], devices[d]->write(out[d].force), pending[d][filled]);
       last_points[d] = points[d];
+      if (settings.monitor) sent[d] = pending[d][filled];
     }
     ++filled;
+    if (settings.monitor) publish_tick(*settings.monitor, k + 1, points, out, sent.data(), m);
     // A frame just promoted (its first tick): record the update the tick now holds.
     if (k % settings.loop.ratio == 0 && k > 0) {
       FrameRecord f = frame_record(loop.newest(), k * period);
@@ -208,6 +245,7 @@ SessionSummary run_lockstep(haptics::Environment& environment, std::vector<std::
   if (progress) progress->finish();
   SessionSummary summary = base.finish();
   summary.first_failure = first_failure;
+  summary.stopped = stopped;
   summary.passivity = passivity_summary(loop);
   summary.identification = identification_summary(loop);
   return summary;
@@ -308,22 +346,9 @@ SessionSummary run_realtime(haptics::Environment& environment, std::vector<std::
     for (int d = 0; d < m; ++d) {
       base.sample(k, points[d], last[d], out[d], devices[d]->write(out[d].force), block[d]);
       last[d] = points[d];
-      if (monitor && d < SessionMonitor::kMaxDevices) monitor->force_n[d].store(block[d].force.norm(), std::memory_order_relaxed);
     }
     if (monitor) {
-      auto& probes = monitor->probes.back();
-      for (int d = 0; d < m && d < SessionMonitor::kMaxDevices; ++d)
-        probes[d] = {points[d],
-                     out[d].proxy,
-                     block[d].force,
-                     out[d].penetration,
-                     out[d].in_contact,
-                     out[d].port_energy_j,
-                     out[d].passivity_scale,
-                     out[d].identified ? out[d].identified_stiffness_n_per_m : 0.0,
-                     out[d].condensed_stiffness_n_per_m};
-      monitor->probes.publish();
-      monitor->ticks.store(k + 1, std::memory_order_relaxed);
+      publish_tick(*monitor, k + 1, points, out, block.data(), m);
       monitor->late_ticks.store(tick_overruns.load(std::memory_order_relaxed), std::memory_order_relaxed);
     }
     if (!ring.push(block.data(), block.size())) dropped.fetch_add(1, std::memory_order_relaxed);

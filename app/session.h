@@ -71,14 +71,15 @@ struct SessionSettings {
   // Real time on a machine with 2 or more cores: the haptic thread on the last core alone, the
   // solver and I/O threads (and the threads they start) on the others.
   bool pin_haptic_core = true;
-  // Real time: set (by a signal handler, say) to end the session; the forces then ramp out over
-  // 0.2 s. A device's fault (Device::fault) ends it the same way.
+  // Set (by a signal handler, a window) to end the session: in real time the forces then ramp out
+  // over 0.2 s (a device's fault, Device::fault, ends it the same way); in lockstep, whose devices
+  // are scripted, the take ends at the next tick.
   const std::atomic<bool>* stop = nullptr;
-  // Real time, on the session's own clock: while set, no tick runs (simulated time stands still,
-  // nothing is recorded, devices are neither read nor written); the schedule resumes afresh. A
-  // stop request still ends the session. Ignored when a device's driver owns the servo clock.
+  // While set, no tick runs (simulated time stands still, nothing is recorded, devices are neither
+  // read nor written); in real time the schedule resumes afresh. A stop request still ends the
+  // session. Ignored when a device's driver owns the servo clock.
   const std::atomic<bool>* pause = nullptr;
-  SessionMonitor* monitor = nullptr;  // real time: live figures (optional)
+  SessionMonitor* monitor = nullptr;  // live figures, each tick (optional)
 };
 
 // Real-time figures (zero in lockstep).

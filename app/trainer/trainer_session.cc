@@ -75,8 +75,18 @@ TrainerSession::TrainerSession(const config::Scene& scene, const TrainerOptions&
         devices_.push_back(make_device(probe, scene_, settings_.loop, nullptr));
         start = dynamic_cast<haptics::PhantomDevice&>(*devices_.back()).position_now();
       } catch (const std::exception& e) {
-        messages.push_back(std::string(e.what()) + "; the mouse drives probe " + probe.name + " instead");
-        mouse = true;
+        if (!cursor_) {
+          messages.push_back(std::string(e.what()) + "; the mouse drives probe " + probe.name + " instead");
+          mouse = true;
+        } else {
+          // The mouse drives another probe already: this one rests 4 cm to the side, above the tissue.
+          messages.push_back(std::string(e.what()) + "; probe " + probe.name + " rests above the tissue");
+          start += Eigen::Vector3d(0, 0.04 * (p % 2 ? 1 : -1), 0);
+          haptics::Trajectory still;
+          still.times_s = {0, 60 * options.max_minutes + 1};
+          still.positions_m = {start, start};
+          devices_.push_back(std::make_unique<haptics::ReplayDevice>(still, settings_.loop.period_s));
+        }
       }
     } else if (!mouse) {
       const std::filesystem::path file = (p == 0 && options.trajectory) ? *options.trajectory : probe.device.trajectory;
@@ -86,6 +96,9 @@ TrainerSession::TrainerSession(const config::Scene& scene, const TrainerOptions&
       devices_.push_back(make_device(probe, scene_, settings_.loop, &*path));
       ticks = std::max(ticks, devices_.back()->ticks());
     }
+    if (options.lockstep && (mouse || probe.device.type == config::DeviceType::phantom))
+      throw std::runtime_error("probe " + probe.name + ": lockstep (--clock lockstep) needs every probe scripted, and this one is " +
+                               (mouse ? "the mouse's" : "a PHANTOM") + "; give it a trajectory (type: replay or operator)");
     if (mouse) {
       if (cursor_) throw std::runtime_error("probe " + probe.name + ": the mouse drives one probe only (" +
                                             scene_.probes[cursor_probe_].name + " already)");
@@ -107,8 +120,11 @@ TrainerSession::TrainerSession(const config::Scene& scene, const TrainerOptions&
   auto environment = std::make_unique<fem::FemEnvironment>(std::move(model->solver), model->newton);
   fem::FemEnvironment& fem = *environment;
   environment_ = std::move(environment);
-  fem.solver().set_assembly_threads(realtime_solver_cores(settings_) >= 2 ? 2 : 1);
-  fem.solver().set_deterministic_factorisations(false);
+  lockstep_ = options.lockstep;
+  if (!lockstep_) {  // lockstep keeps the solver as `fetouch replay` runs it: reproducible
+    fem.solver().set_assembly_threads(realtime_solver_cores(settings_) >= 2 ? 2 : 1);
+    fem.solver().set_deterministic_factorisations(false);
+  }
   if (options.recording) {
     settings_.recording = *options.recording;
     settings_.header.program_version = std::string("fetouch ") + kVersion + " (" + kGitRevision + ")";
@@ -155,7 +171,7 @@ void TrainerSession::start() {
   running_ = true;
   thread_ = std::thread([this] {
     try {
-      SessionSummary s = run_realtime(*environment_, devices_, settings_);
+      SessionSummary s = lockstep_ ? run_lockstep(*environment_, devices_, settings_) : run_realtime(*environment_, devices_, settings_);
       std::lock_guard<std::mutex> lock(result_mutex_);
       summary_ = std::move(s);
     } catch (const std::exception& e) {

@@ -48,6 +48,10 @@ struct TrainerOptions {
   double duration_s = 0;                             // 0: until stopped (at most max_minutes)
   double max_minutes = 30;
   std::optional<std::filesystem::path> recording;   // the HDF5 recording of this take
+  // Simulated time (app/session.h's lockstep): every frame answered before the next, the take as
+  // fast as the solver goes and the same, bit for bit, every time. Scripted probes only (tests,
+  // demonstrations); a mouse or a PHANTOM needs real time.
+  bool lockstep = false;
 };
 
 struct MeshView {
@@ -109,6 +113,7 @@ class TrainerSession {
   MeshView mesh_;
   haptics::TripleBuffer<TissueSnapshot> snapshots_{TissueSnapshot{}};
   std::atomic<bool> stop_{false}, pause_{false}, running_{false}, want_stress_{false};
+  bool lockstep_ = false;
   std::thread thread_;
   mutable std::mutex result_mutex_;
   SessionSummary summary_;
