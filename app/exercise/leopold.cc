@@ -247,9 +247,9 @@ Assessment assess(const imaging::PhantomGeometry& geometry, const config::FetalP
           const double u = (cell_centre(ci) - st.x()) / ds, v = (cell_centre(cj) - st.y()) / dt;
           if (cell >= 0 && u * u + v * v <= 1) cell = std::max(cell, f);
         }
-      if (f < settings.palpation_force_n) continue;
       ManeuverResult& m = a.maneuvers[maneuver_at(h.time_s[i])];
       m.largest_force_n = std::max(m.largest_force_n, f);
+      if (f < settings.palpation_force_n) continue;
       const auto& zones = leopold_guides()[static_cast<int>(m.maneuver)].zones;
       for (std::size_t z = 0; z < zones.size(); ++z)
         if (zones[z].contains(st)) m.zones_touched[z] = true;

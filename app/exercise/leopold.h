@@ -109,7 +109,7 @@ struct ManeuverResult {
   std::vector<bool> zones_touched;  // per zone of the guide
   std::vector<Target> targets;
   std::vector<bool> targets_reached;
-  double largest_force_n = 0;
+  double largest_force_n = 0;  // in contact, within the maneuver's time
   bool reached() const;  // every zone touched and every target reached
 };
 

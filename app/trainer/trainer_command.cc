@@ -8,6 +8,7 @@
 #include <cstdlib>
 #include <iostream>
 #include <memory>
+#include <sstream>
 
 #include "app/cli.h"
 #include "app/commands/commands.h"
@@ -27,7 +28,62 @@ struct TrainerCommandOptions {
   std::string scene, trajectory, screenshot, out = "fetouch-trainer";
   double duration_s = 0;
   bool mouse = false, json = false;
+  std::string exercise, answers, clock = "realtime";
+  std::uint32_t seed = 1;
+  std::vector<double> maneuver_times;
+  double comfort_limit_n = 0;
 };
+
+// --exercise's settings on the scene (its phantom's seed and a pose drawn from it) and the window;
+// false (the reason on standard error) when they cannot be.
+bool set_up_exercise(const TrainerCommandOptions& o, config::Scene& scene, trainer::ExerciseOptions& e) {
+  if (o.exercise.empty()) {
+    if (!o.answers.empty() || !o.maneuver_times.empty()) {
+      std::cerr << "error: --answers and --maneuvers belong to an exercise: add --exercise leopold\n";
+      return false;
+    }
+    return true;
+  }
+  if (o.exercise != "leopold") {
+    std::cerr << "error: --exercise " << o.exercise << ": the exercises are: leopold\n";
+    return false;
+  }
+  if (scene.mesh.source != config::MeshSource::phantom) {
+    std::cerr << "error: " << o.scene << ": the Leopold exercise needs a phantom scene (mesh.phantom), such as "
+                 "config/scenes/leopold.yaml\n";
+    return false;
+  }
+  e.on = true;
+  scene.mesh.phantom.seed = static_cast<int>(o.seed);
+  scene.mesh.phantom.pose = config::draw_pose(o.seed);
+  if (!o.maneuver_times.empty()) {
+    if (o.maneuver_times.size() != 3 || !(o.maneuver_times[0] <= o.maneuver_times[1] && o.maneuver_times[1] <= o.maneuver_times[2])) {
+      std::cerr << "error: --maneuvers takes three times in order (s): when the second, third and fourth maneuvers begin\n";
+      return false;
+    }
+    e.maneuver_times = std::array<double, 3>{o.maneuver_times[0], o.maneuver_times[1], o.maneuver_times[2]};
+  }
+  if (!o.answers.empty()) {
+    std::vector<std::string> names;
+    std::string name;
+    for (std::istringstream in(o.answers); std::getline(in, name, ',');) names.push_back(name);
+    exercise::Answers a;
+    config::FetalLie lie;
+    config::FetalPresentation presentation;
+    config::FetalBack back;
+    if (names.size() != 3 || !config::parse(names[0], lie) || !config::parse(names[1], presentation) || !config::parse(names[2], back)) {
+      std::cerr << "error: --answers " << o.answers << ": give LIE,PRESENTATION,BACK by their names (docs/scenes.md), e.g. "
+                   "longitudinal,cephalic,left_anterior\n";
+      return false;
+    }
+    e.answers = exercise::Answers{lie, presentation, back};
+  }
+  if (o.comfort_limit_n > 0) {
+    e.comfort_limit_n = o.comfort_limit_n;
+    e.comfort_limit_source = "given on the command line (--comfort-limit)";
+  }
+  return true;
+}
 
 int run_trainer(const TrainerCommandOptions& o) {
   const char* display = std::getenv("DISPLAY");
@@ -47,6 +103,8 @@ int run_trainer(const TrainerCommandOptions& o) {
     std::cerr << "error: --screenshot needs --duration: the screenshot is taken when the session ends\n";
     return kExitBadInput;
   }
+  trainer::ExerciseOptions exercise;
+  if (!set_up_exercise(o, *loaded, exercise)) return kExitBadInput;
   ensure_mpi();
   // The window, and the threads of a software OpenGL renderer, share the haptic thread's core
   // (which it preempts at every tick) and leave the solver its own.
@@ -60,10 +118,12 @@ int run_trainer(const TrainerCommandOptions& o) {
   if (!o.trajectory.empty()) session.trajectory = o.trajectory;
   session.mouse = o.mouse;
   session.duration_s = o.duration_s;
+  session.lockstep = o.clock == "lockstep";
   trainer::WindowOptions window;
   window.out = o.out;
   if (!o.screenshot.empty()) window.screenshot = o.screenshot;
   window.headless = o.duration_s > 0;
+  window.exercise = exercise;
   std::unique_ptr<trainer::TrainerWindow> w;
   try {
     w = std::make_unique<trainer::TrainerWindow>(*loaded, session, window, o.scene);
@@ -105,6 +165,21 @@ int run_trainer(const TrainerCommandOptions& o) {
     json.key("renders").value(f.renders);
     json.key("wall_s").value(f.wall_s);
     json.key("screenshot").value(o.screenshot);
+    if (f.assessment) {
+      const exercise::Assessment& a = *f.assessment;
+      json.key("exercise").begin_object();
+      json.key("pose").value(config::describe(a.pose));
+      json.key("assessment").value((f.assessment_dir / "assessment.json").string());
+      double right = 0;
+      for (const auto& r : a.answers) right += r.score;
+      int reached = 0;
+      for (const auto& m : a.maneuvers) reached += m.reached();
+      json.key("answer_score").value(right);
+      json.key("maneuvers_reached").value(reached);
+      json.key("covered_share").value(a.covered_share);
+      json.key("largest_force_n").value(a.largest_force_n);
+      json.end_object();
+    }
     if (!f.ultrasound_png.empty()) {
       const auto vector = [&json](const Eigen::Vector3d& v) {
         json.begin_array();
@@ -159,7 +234,10 @@ void add_trainer_command(CLI::App& parent, int& exit_code) {
       "reset, ctrl+R record a take (DIR/take-N.h5, replayable with `fetouch replay --trajectory`),\n"
       "ctrl+S screenshot, C colour field, O image plane, V camera, M local model and H hold (applied\n"
       "if the stability analysis accepts them), ctrl+O open a scene. With --duration it runs that long,\n"
-      "writes --screenshot and exits (docs, tests, bug reports). Needs a display: xvfb-run -a.");
+      "writes --screenshot and exits (docs, tests, bug reports). Needs a display: xvfb-run -a.\n"
+      "--exercise leopold [--seed S] on a phantom scene (config/scenes/leopold.yaml): the four Leopold\n"
+      "maneuvers guided one by one with the fetus and the ultrasound hidden (N: the next), then the lie,\n"
+      "presentation and position to answer; the assessment goes to OUT/exercise (docs/trainer.md).");
   cmd->add_option("scene", o->scene, "Scene file (.yaml)")->required()->check(CLI::ExistingFile);
   cmd->add_option("--trajectory", o->trajectory, "The first probe's trajectory instead of the scene's (CSV t,x,y,z or a recording .h5)")
       ->check(CLI::ExistingFile);
@@ -168,6 +246,18 @@ void add_trainer_command(CLI::App& parent, int& exit_code) {
   cmd->add_option("--screenshot", o->screenshot, "PNG written when the session ends (with --duration)");
   cmd->add_option("--out", o->out, "Folder for takes and screenshots")->capture_default_str();
   cmd->add_flag("--json", o->json, "Print the summary as JSON on stdout");
+  cmd->add_option("--clock", o->clock, "realtime (a 1 kHz haptic thread on the wall clock), or lockstep (simulated time: "
+                                       "scripted probes only, the take reproducible and as fast as the solver goes)")
+      ->check(CLI::IsMember({"realtime", "lockstep"}))
+      ->capture_default_str();
+  cmd->add_option("--exercise", o->exercise, "An exercise on the scene's phantom: leopold (the four Leopold maneuvers, then "
+                                             "the fetus's lie, presentation and position to answer; docs/trainer.md)");
+  cmd->add_option("--seed", o->seed, "The exercise's fetus: the phantom's seed and the pose drawn from it")->capture_default_str();
+  cmd->add_option("--maneuvers", o->maneuver_times, "Scripted: the simulated times (s) at which maneuvers 2, 3 and 4 begin")
+      ->delimiter(',')->expected(3);
+  cmd->add_option("--answers", o->answers, "Scripted: LIE,PRESENTATION,BACK, given when the take ends (with --duration)");
+  cmd->add_option("--comfort-limit", o->comfort_limit_n, "The exercise's comfort limit for the force (N; none by default)")
+      ->check(CLI::Range(0.0, 100.0));
   cmd->callback([o, &exit_code]() { exit_code = run_trainer(*o); });
 }
 

@@ -25,9 +25,20 @@ void TrainerWindow::toggle_pause() {
   session_->set_paused(!session_->paused());
 }
 
-void TrainerWindow::reset() { start_take(recording_); }
+void TrainerWindow::reset() {
+  start_take(recording_);
+  if (window_options_.exercise.on) {  // the exercise from its first maneuver, the fetus hidden again
+    step_ = 0;
+    hide_the_answer(true);
+    show_exercise_step();
+  }
+}
 
 void TrainerWindow::toggle_recording() {
+  if (window_options_.exercise.on) {
+    message_->setText("the exercise records its take itself (OUT/exercise/take.h5)");
+    return;
+  }
   if (recording_) {
     start_take(std::nullopt);
     return;
@@ -49,6 +60,10 @@ void TrainerWindow::toggle_plane() {
 }
 
 bool TrainerWindow::open_scene(const std::filesystem::path& file) {
+  if (window_options_.exercise.on) {
+    message_->setText("the exercise keeps its scene: quit and start another (fetouch trainer SCENE --exercise leopold --seed S)");
+    return false;
+  }
   // The scene is checked whole before anything of the running one is let go: a broken file leaves
   // the session as it was, its reason (file:line) on the message line.
   std::optional<config::Scene> loaded;

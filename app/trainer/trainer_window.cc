@@ -70,6 +70,7 @@ TrainerWindow::TrainerWindow(const config::Scene& scene, const TrainerOptions& s
   energy_plot_ = new TracePlot("port energy per probe (last 5 s; < 0: the loop handed the hand energy)", "mJ", 5.0, this);
   auto* side = new QWidget(this);
   auto* column = new QVBoxLayout(side);
+  if (window_options_.exercise.on) column->addWidget(build_exercise_panel(), 3);
   column->addWidget(ultrasound_, 3);
   column->addWidget(force_plot_, 1);
   column->addWidget(frame_plot_, 1);
@@ -141,7 +142,16 @@ TrainerWindow::TrainerWindow(const config::Scene& scene, const TrainerOptions& s
   regions_bar_->setToolTip("show or hide each region's surfaces");
 
   resize(1280, 800);
-  start_take(std::nullopt);
+  if (window_options_.exercise.on) {
+    // The exercise's take is recorded: its assessment is made from the recording.
+    std::error_code ignored;
+    std::filesystem::create_directories(window_options_.out / "exercise", ignored);
+    start_take(window_options_.out / "exercise" / "take.h5");
+    hide_the_answer(true);
+    show_exercise_step();
+  } else {
+    start_take(std::nullopt);
+  }
   timer_ = new QTimer(this);
   connect(timer_, &QTimer::timeout, this, [this] { tick(); });
   timer_->start(30);
@@ -261,6 +271,7 @@ void TrainerWindow::tick() {
     take_started_ = std::chrono::steady_clock::now(), take_images_ = figures_.ultrasound_images;
   }
   take_mode_verdict();
+  exercise_tick();
   if (session_->take_snapshot()) {
     shown_ = session_->snapshot();
     view_->update_tissue(shown_, field_);
@@ -287,7 +298,8 @@ void TrainerWindow::tick() {
   // The image plane follows the probe at the window's rate (through its proxy on the surface while
   // it touches, else through its patch), the tissue in it at the solver's: a new image is asked for
   // when either moved, and made while the view renders; the newest made is shown.
-  if (!shown_.patch_centre.empty()) {
+  const bool hidden = window_options_.exercise.on && step_ <= exercise::kManeuvers;  // no image until answered
+  if (!shown_.patch_centre.empty() && !hidden) {
     const int probe = std::max(0, session_->cursor_probe());
     const SessionMonitor::ProbeTick& t = monitor.probes.front()[probe];
     const Eigen::Vector3d at = t.in_contact ? t.proxy : shown_.patch_centre[probe];
@@ -309,6 +321,9 @@ void TrainerWindow::tick() {
   update_status();
   if (!session_->running() && window_options_.headless) {
     figures_.error = session_->error();
+    // A scripted exercise answers when its take ends (what it was given, else nothing).
+    if (figures_.error.empty() && window_options_.exercise.on && step_ <= exercise::kManeuvers)
+      answer(window_options_.exercise.answers.value_or(exercise::Answers{}));
     if (window_options_.screenshot && figures_.error.empty()) {
       if (!save_screenshot(*window_options_.screenshot))
         figures_.error = "cannot write the screenshot " + window_options_.screenshot->string();

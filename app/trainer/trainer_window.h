@@ -14,12 +14,14 @@
 #include <string>
 #include <vector>
 
+#include "app/exercise/leopold.h"
 #include "app/trainer/deformed_slice.h"
 #include "app/trainer/tissue_view.h"
 #include "app/trainer/trainer_session.h"
 #include "app/trainer/ultrasound_imager.h"
 
 class QComboBox;
+class QPushButton;
 class QToolBar;
 class QLabel;
 class QTimer;
@@ -31,10 +33,24 @@ namespace fetouch::app::trainer {
 
 class TracePlot;
 
+// The Leopold exercise (docs/trainer.md): the four maneuvers guided one by one with the fetus and
+// the ultrasound hidden, then the answers, then the assessment (app/exercise/leopold.h) written to
+// OUT/exercise and the fetus shown. The scene is a phantom scene whose pose the command has drawn.
+struct ExerciseOptions {
+  bool on = false;
+  // Scripted (tests, demonstrations): the simulated times at which maneuvers 2, 3 and 4 begin, and
+  // the answers given when the take ends.
+  std::optional<std::array<double, exercise::kManeuvers - 1>> maneuver_times;
+  std::optional<exercise::Answers> answers;
+  double comfort_limit_n = 0;  // 0: none stated
+  std::string comfort_limit_source;
+};
+
 struct WindowOptions {
   std::filesystem::path out = "fetouch-trainer";  // takes and screenshots go here
   std::optional<std::filesystem::path> screenshot;  // headless: written when the session ends
   bool headless = false;                             // close once the session has ended
+  ExerciseOptions exercise;
 };
 
 // What the window measured, for the command's summary.
@@ -50,6 +66,8 @@ struct WindowFigures {
   // end (`frame`), in `plane`, the volume scaled by `gain` (none: the cross-section), and OUT.vtu,
   // that tissue (view_export.h).
   std::filesystem::path ultrasound_png, tissue_vtu;
+  std::optional<exercise::Assessment> assessment;  // the exercise's, once answered
+  std::filesystem::path assessment_dir;
   SlicePlane plane;
   double gain = 1;
   bool volume = false;
@@ -91,6 +109,12 @@ class TrainerWindow : public QMainWindow {
   // what its surfaces covered; kept across takes and scenes by name. False: no such region.
   TissueView* view() { return view_.get(); }
   bool set_region_visible(const std::string& name, bool on);
+  // The exercise (trainer_exercise.cc): the next maneuver (N), or the answers after the fourth;
+  // answering ends the take, assesses it and shows the fetus. False (the reason on the message
+  // line) when it is not the time for it.
+  bool next_maneuver();
+  bool answer(const exercise::Answers& answers);
+  int exercise_step() const { return step_; }  // 0..3 the maneuvers, 4 the answers, 5 assessed
 
  protected:
   bool eventFilter(QObject* watched, QEvent* event) override;
@@ -104,6 +128,11 @@ class TrainerWindow : public QMainWindow {
   void show_mode();
   void set_cursor_at_display(double x, double y);
   void export_views(const std::filesystem::path& screenshot);
+  QWidget* build_exercise_panel();
+  void show_exercise_step();
+  void exercise_tick();
+  void hide_the_answer(bool hidden);
+  double simulated_s();
 
   config::Scene scene_;
   TrainerOptions session_options_;
@@ -146,6 +175,12 @@ class TrainerWindow : public QMainWindow {
   long rate_ticks_ = 0, rate_frames_ = 0, rate_images_ = 0, take_images_ = 0;
   WindowFigures figures_;
   TissueSnapshot shown_;
+  QLabel* guide_ = nullptr;
+  QPushButton *next_button_ = nullptr, *answer_button_ = nullptr;
+  QComboBox *lie_box_ = nullptr, *presentation_box_ = nullptr, *back_box_ = nullptr;
+  QWidget* answers_ = nullptr;
+  int step_ = 0;
+  std::array<double, exercise::kManeuvers - 1> next_times_{};
 };
 
 }  // namespace fetouch::app::trainer
