@@ -77,4 +77,24 @@ std::vector<IdentificationSummary> identification_summary(const haptics::HapticL
   return out;
 }
 
+void publish_tick(SessionMonitor& monitor, long ticks_done, const std::vector<Eigen::Vector3d>& points,
+                  const std::vector<haptics::ContactOutput>& out, const DeviceSample* sent, int m) noexcept {
+  auto& probes = monitor.probes.back();
+  for (int d = 0; d < m && d < SessionMonitor::kMaxDevices; ++d) {
+    monitor.force_n[d].store(sent[d].force.norm(), std::memory_order_relaxed);
+    probes[d] = {points[d],
+                 out[d].proxy,
+                 sent[d].force,
+                 out[d].penetration,
+                 out[d].in_contact,
+                 out[d].port_energy_j,
+                 out[d].passivity_scale,
+                 out[d].identified ? out[d].identified_stiffness_n_per_m : 0.0,
+                 out[d].condensed_stiffness_n_per_m};
+  }
+  monitor.probes.publish();
+  monitor.ticks.store(ticks_done, std::memory_order_relaxed);
+}
+
+
 }  // namespace fetouch::app

@@ -1,5 +1,5 @@
-// What a session records of the loop's state (app/session.cc): a frame's row of the recording, and
-// the passivity layer's counters for the summary.
+// What a session records of the loop's state (app/session.cc): a frame's row of the recording, the
+// passivity layer's counters for the summary, and a tick's figures for a window.
 #pragma once
 
 #include <vector>
@@ -19,5 +19,10 @@ void add_energy_audit(FrameRecord& record, long frame, const std::vector<haptics
 std::vector<PassivitySummary> passivity_summary(const haptics::HapticLoop& loop);
 // The identification's comparison with the condensed stiffness, per device.
 std::vector<IdentificationSummary> identification_summary(const haptics::HapticLoop& loop);
+
+// A tick's figures for the window (SessionMonitor): each device's point, proxy, force and layers'
+// state, then the tick count. No allocation: the haptic tick calls it.
+void publish_tick(SessionMonitor& monitor, long ticks_done, const std::vector<Eigen::Vector3d>& points,
+                  const std::vector<haptics::ContactOutput>& out, const DeviceSample* sent, int m) noexcept;
 
 }  // namespace fetouch::app
