@@ -31,8 +31,7 @@ double mean(const std::array<double, 3>& a) { return (a[0] + a[1] + a[2]) / 3; }
 
 // The two poles as the hands find them: the head, and the breech (the trunk's far end).
 std::array<Target, 2> poles(const imaging::PhantomGeometry& g) {
-  const auto [head_dir, back_dir] = fetal_directions(g);
-  (void)back_dir;
+  const Vec3 head_dir = fetal_directions(g).first;
   const Vec3 breech = vec(g.trunk.centre) - 0.6 * g.trunk.radii[0] * head_dir;
   return {disc("the head", vec(g.head.centre), mean(g.head.radii)),
           disc("the breech", breech, 0.5 * (g.trunk.radii[1] + g.trunk.radii[2]))};
@@ -114,9 +113,7 @@ std::vector<Target> maneuver_targets(Maneuver maneuver, const imaging::PhantomGe
     case Maneuver::fundal:
       return {in_fundus ? fundal : empty("the empty fundus", map, 0.75, 0)};
     case Maneuver::umbilical: {
-      const auto [head_dir, back_dir] = fetal_directions(g);
-      (void)head_dir;
-      const Vec3 back = vec(g.trunk.centre) + g.trunk.radii[2] * back_dir;
+      const Vec3 back = vec(g.trunk.centre) + g.trunk.radii[2] * fetal_directions(g).second;
       Vec3 ends = Vec3::Zero();
       for (const auto& limb : g.limbs) ends += vec(limb.b) / 4;
       double spread = 10;
