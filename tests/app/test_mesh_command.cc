@@ -303,11 +303,14 @@ TEST(MeshCommand, ImpossibleSegmentationsAreRefusedWithTheReason) {
   EXPECT_NE(voxel.err.find("thick enough to have a surface"), std::string::npos) << voxel.err;
   EXPECT_FALSE(fs::exists(dir / "sheet.msh"));
   EXPECT_FALSE(fs::exists(dir / "voxel.msh"));
-  // A slab three voxels thick (50 x 50 x 3: 7.5 ml) is thick enough for 8 mm elements.
-  write_mask(dir / "slab.mha", 60, [](int i, int j, int k) { return k >= 29 && k <= 31 && i >= 5 && i < 55 && j >= 5 && j < 55; });
+  // A slab five voxels thick (50 x 50 x 5: 12.5 ml) is thick enough for 8 mm elements: 14.4 deg and
+  // a radius ratio of 0.21 against the bounds' 10 deg and 0.10. (Three voxels sat on the bound: a
+  // radius ratio of 0.094 in two full suites on 2026-11-28, 0.11-0.16 alone, the meshing not the
+  // same to the last bit from run to run; four left its volume 2.9 % off, against the 3 % allowed.)
+  write_mask(dir / "slab.mha", 60, [](int i, int j, int k) { return k >= 29 && k <= 33 && i >= 5 && i < 55 && j >= 5 && j < 55; });
   const YAML::Node j = check_mesh((dir / "slab.mha").string() + " --labels 1 --size 8", dir / "slab.msh");
   ASSERT_TRUE(j);
-  EXPECT_NEAR(j["segmented_volume_m3"].as<double>(), 7500e-9, 1e-12);
+  EXPECT_NEAR(j["segmented_volume_m3"].as<double>(), 12500e-9, 1e-12);
   fs::remove_all(dir);
 }
 
