@@ -137,6 +137,16 @@ std::vector<Target> maneuver_targets(Maneuver maneuver, const imaging::PhantomGe
   return {};
 }
 
+double Assessment::answer_score() const {
+  double sum = 0;
+  for (const AnswerResult& r : answers) sum += r.score;
+  return sum;
+}
+
+int Assessment::maneuvers_reached() const {
+  return static_cast<int>(std::count_if(maneuvers.begin(), maneuvers.end(), [](const ManeuverResult& m) { return m.reached(); }));
+}
+
 bool ManeuverResult::reached() const {
   return std::all_of(zones_touched.begin(), zones_touched.end(), [](bool b) { return b; }) &&
          std::all_of(targets_reached.begin(), targets_reached.end(), [](bool b) { return b; });

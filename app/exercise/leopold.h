@@ -130,6 +130,8 @@ struct Assessment {
   // -1 outside the abdomen (the unit disc), else the largest force pressed on the cell (0: untouched).
   std::vector<double> coverage;
   double covered_share = 0;  // of the abdomen's cells, those pressed with at least palpation_force_n
+  double answer_score() const;  // the answers' scores summed (of 3)
+  int maneuvers_reached() const;  // of 4
 };
 
 // Assesses a take: the hands' tracks, the times at which maneuvers 2, 3 and 4 began (the first

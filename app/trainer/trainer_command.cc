@@ -170,12 +170,8 @@ int run_trainer(const TrainerCommandOptions& o) {
       json.key("exercise").begin_object();
       json.key("pose").value(config::describe(a.pose));
       json.key("assessment").value((f.assessment_dir / "assessment.json").string());
-      double right = 0;
-      for (const auto& r : a.answers) right += r.score;
-      int reached = 0;
-      for (const auto& m : a.maneuvers) reached += m.reached();
-      json.key("answer_score").value(right);
-      json.key("maneuvers_reached").value(reached);
+      json.key("answer_score").value(a.answer_score());
+      json.key("maneuvers_reached").value(a.maneuvers_reached());
       json.key("covered_share").value(a.covered_share);
       json.key("largest_force_n").value(a.largest_force_n);
       json.end_object();

@@ -165,11 +165,9 @@ bool TrainerWindow::answer(const exercise::Answers& given) {
   std::string text = "<b>The fetus: " + config::describe(a.pose) + "</b><br><br>";
   for (const exercise::AnswerResult& r : a.answers)
     text += r.asked + ": " + (r.given.empty() ? "(none)" : r.given) + (r.score == 1 ? " (right)" : r.score > 0 ? " (nearly)" : " (wrong)") + "<br>";
-  int reached = 0;
-  for (const exercise::ManeuverResult& m : a.maneuvers) reached += m.reached();
   char line[200];
   std::snprintf(line, sizeof line, "<br>Maneuvers that reached what they are for: %d of 4. Abdomen covered: %.0f %%. Largest force %.2f N.",
-                reached, 100 * a.covered_share, a.largest_force_n);
+                a.maneuvers_reached(), 100 * a.covered_share, a.largest_force_n);
   guide_->setText(QString::fromStdString(text + line));
   message_->setText(QString::fromStdString("wrote " + (figures_.assessment_dir / "report.md").string()));
   return true;
