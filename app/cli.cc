@@ -102,6 +102,7 @@ int run_cli(int argc, char** argv, AddDrawingCommand add_drawing_command) {
   add_run_command(app, exit_code);
   add_devices_command(app, exit_code);
   drawing("trainer");
+  drawing("review");
   add_trajectory_command(app, exit_code);
   drawing("study");
 

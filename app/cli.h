@@ -25,6 +25,7 @@ inline constexpr DrawingCommand kDrawingCommands[] = {
     {"stability", "Analyse the stability of a local model on a tissue"},
     {"render", "Draw a mesh or a volume's middle slice to a PNG"},
     {"trainer", "The trainer window: touch the tissue, see it deform and its ultrasound"},
+    {"review", "Play a recorded take back: the probe paths and forces over the anatomy, the scores"},
     {"study", "Studies of a scene: accuracy against time, effects' costs, hard cases"},
 };
 const char* drawing_command_description(const char* name);

@@ -14,6 +14,7 @@ void add_drawing_command(const char* name, CLI::App& app, int& exit_code) {
   if (std::strcmp(name, "stability") == 0) add_stability_command(app, exit_code);
   if (std::strcmp(name, "render") == 0) add_render_command(app, exit_code);
   if (std::strcmp(name, "trainer") == 0) add_trainer_command(app, exit_code);
+  if (std::strcmp(name, "review") == 0) add_review_command(app, exit_code);
   if (std::strcmp(name, "study") == 0) add_study_command(app, exit_code);
 }
 

@@ -20,6 +20,7 @@ void add_trajectory_command(CLI::App& parent, int& exit_code);
 void add_run_command(CLI::App& parent, int& exit_code);
 void add_devices_command(CLI::App& parent, int& exit_code);
 void add_trainer_command(CLI::App& parent, int& exit_code);
+void add_review_command(CLI::App& parent, int& exit_code);
 void add_study_command(CLI::App& parent, int& exit_code);
 
 }  // namespace fetouch::app

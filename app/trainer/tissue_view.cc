@@ -252,9 +252,20 @@ void TissueView::update_tissue(const TissueSnapshot& s, ColourField field) {
     largest = top;
   }
   const bool cells = stress;
+  const bool regions = field == ColourField::regions;
+  field_ = field;
   std::vector<vtkPolyDataMapper*> mappers{surface_mapper_.Get()};
   for (RegionLayer& layer : layers_) mappers.push_back(layer.mapper.Get());
+  if (regions) {
+    surface_actor_->GetProperty()->SetColor(0.93, 0.76, 0.68);
+    for (std::size_t i = 0; i < layers_.size(); ++i) {
+      const std::array<double, 3> c = region_colour(i);
+      layers_[i].actor->GetProperty()->SetColor(c[0], c[1], c[2]);
+    }
+  }
+  bar_->SetVisibility(bar_wanted_ && !regions);
   for (auto* mapper : mappers) {
+    mapper->SetScalarVisibility(!regions);
     if (cells)
       mapper->SetScalarModeToUseCellData();
     else
@@ -310,6 +321,21 @@ void TissueView::update_probes(const std::array<SessionMonitor::ProbeTick, Sessi
 void TissueView::show_cursor(bool on, const Eigen::Vector3d& at) {
   cursor_->SetVisibility(on);
   if (on) cursor_->SetPosition(at.x(), at.y(), at.z());
+}
+
+void TissueView::show_colour_bar(bool on) {
+  bar_wanted_ = on;
+  bar_->SetVisibility(on && field_ != ColourField::regions);
+}
+
+std::array<double, 3> TissueView::region_colour(std::size_t i) const {
+  // The wall skin-toned; then bone, flesh, and distinct hues for any further regions.
+  static constexpr std::array<std::array<double, 3>, 6> kPalette{
+      {{0.95, 0.90, 0.72}, {0.86, 0.50, 0.46}, {0.45, 0.70, 0.92}, {0.62, 0.84, 0.50}, {0.80, 0.62, 0.90}, {0.95, 0.70, 0.30}}};
+  if (i < layers_.size() && layers_[i].name == "wall") return {0.93, 0.76, 0.68};
+  std::size_t k = 0;
+  for (std::size_t j = 0; j < i && j < layers_.size(); ++j) k += layers_[j].name != "wall";
+  return kPalette[k % kPalette.size()];
 }
 
 void TissueView::reset_camera() {

@@ -27,7 +27,10 @@ class vtkPolyDataNormals;
 
 namespace fetouch::app::trainer {
 
-enum class ColourField { displacement, von_mises };
+// What colours the surfaces: the displacement's magnitude, the von Mises stress (both on a colour
+// bar), or each region its own colour (the wall skin-toned: the anatomy, as the review and the
+// exercise's answer show it).
+enum class ColourField { displacement, von_mises, regions };
 
 class TissueView {
  public:
@@ -39,7 +42,10 @@ class TissueView {
   void update_probes(const std::array<SessionMonitor::ProbeTick, SessionMonitor::kMaxDevices>& probes, int count);
   void show_cursor(bool on, const Eigen::Vector3d& at = Eigen::Vector3d::Zero());
   void reset_camera();
+  void show_colour_bar(bool on);  // the colour field's bar (shown unless hidden here)
   bool has_inner_structures() const { return interfaces_ > 0; }
+  // The colour of region i when the field is `regions` (r, g, b in 0..1).
+  std::array<double, 3> region_colour(std::size_t i) const;
 
   // The regions that draw interfaces: each draws the faces it shares with a larger region (the
   // one around it), oriented out of it.
@@ -82,6 +88,7 @@ class TissueView {
   std::vector<ProbeActors> probes_;
   std::size_t interfaces_ = 0;
   ColourField field_ = ColourField::displacement;
+  bool bar_wanted_ = true;
 };
 
 }  // namespace fetouch::app::trainer

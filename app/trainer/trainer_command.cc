@@ -28,7 +28,7 @@ struct TrainerCommandOptions {
   std::string scene, trajectory, screenshot, out = "fetouch-trainer";
   double duration_s = 0;
   bool mouse = false, json = false;
-  std::string exercise, answers, clock = "realtime";
+  std::string exercise, answers, clock = "realtime", step_screenshots;
   std::uint32_t seed = 1;
   std::vector<double> maneuver_times;
   double comfort_limit_n = 0;
@@ -38,8 +38,8 @@ struct TrainerCommandOptions {
 // false (the reason on standard error) when they cannot be.
 bool set_up_exercise(const TrainerCommandOptions& o, config::Scene& scene, trainer::ExerciseOptions& e) {
   if (o.exercise.empty()) {
-    if (!o.answers.empty() || !o.maneuver_times.empty()) {
-      std::cerr << "error: --answers and --maneuvers belong to an exercise: add --exercise leopold\n";
+    if (!o.answers.empty() || !o.maneuver_times.empty() || !o.step_screenshots.empty()) {
+      std::cerr << "error: --answers, --maneuvers and --step-screenshots belong to an exercise: add --exercise leopold\n";
       return false;
     }
     return true;
@@ -78,6 +78,7 @@ bool set_up_exercise(const TrainerCommandOptions& o, config::Scene& scene, train
     }
     e.answers = exercise::Answers{lie, presentation, back};
   }
+  if (!o.step_screenshots.empty()) e.step_screenshots = o.step_screenshots;
   if (o.comfort_limit_n > 0) {
     e.comfort_limit_n = o.comfort_limit_n;
     e.comfort_limit_source = "given on the command line (--comfort-limit)";
@@ -252,6 +253,8 @@ void add_trainer_command(CLI::App& parent, int& exit_code) {
   cmd->add_option("--maneuvers", o->maneuver_times, "Scripted: the simulated times (s) at which maneuvers 2, 3 and 4 begin")
       ->delimiter(',')->expected(3);
   cmd->add_option("--answers", o->answers, "Scripted: LIE,PRESENTATION,BACK, given when the take ends (with --duration)");
+  cmd->add_option("--step-screenshots", o->step_screenshots, "Pictures of the exercise's steps to this folder: step-K.png 1.7 s "
+                                                             "into maneuver K, answers.png before answering (docs)");
   cmd->add_option("--comfort-limit", o->comfort_limit_n, "The exercise's comfort limit for the force (N; none by default)")
       ->check(CLI::Range(0.0, 100.0));
   cmd->callback([o, &exit_code]() { exit_code = run_trainer(*o); });

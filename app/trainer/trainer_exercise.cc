@@ -112,8 +112,30 @@ bool TrainerWindow::next_maneuver() {
 
 void TrainerWindow::exercise_tick() {
   const ExerciseOptions& o = window_options_.exercise;
-  if (!o.on || !o.maneuver_times || step_ + 1 >= exercise::kManeuvers) return;
+  if (!o.on) return;
+  if (o.step_screenshots && step_ < exercise::kManeuvers && !step_pictured_[step_]) {
+    const double begun = step_ == 0 ? 0 : next_times_[step_ - 1];
+    if (simulated_s() >= begun + 1.7) {
+      step_pictured_[step_] = true;
+      picture_step("step-" + std::to_string(step_ + 1) + ".png");
+    }
+  }
+  if (!o.maneuver_times || step_ + 1 >= exercise::kManeuvers) return;
   if (simulated_s() >= (*o.maneuver_times)[step_]) next_maneuver();
+}
+
+void TrainerWindow::picture_step(const std::string& name) {
+  const std::filesystem::path file = *window_options_.exercise.step_screenshots / name;
+  if (!save_screenshot(file)) message_->setText(QString::fromStdString("could not write " + file.string()));
+}
+
+void TrainerWindow::choose_answers(const exercise::Answers& given) {
+  const auto choose = [](QComboBox* box, const std::optional<std::string>& name) {
+    box->setCurrentIndex(name ? std::max(0, box->findData(QString::fromStdString(*name))) : 0);
+  };
+  choose(lie_box_, given.lie ? std::optional<std::string>(config::to_string(*given.lie)) : std::nullopt);
+  choose(presentation_box_, given.presentation ? std::optional<std::string>(config::to_string(*given.presentation)) : std::nullopt);
+  choose(back_box_, given.back ? std::optional<std::string>(config::to_string(*given.back)) : std::nullopt);
 }
 
 bool TrainerWindow::answer(const exercise::Answers& given) {
@@ -159,6 +181,10 @@ bool TrainerWindow::answer(const exercise::Answers& given) {
   }
   step_ = exercise::kManeuvers + 1;
   hide_the_answer(false);
+  // The fetus shown in its regions' own colours (C: back to the fields).
+  field_ = ColourField::regions;
+  if (view_) view_->update_tissue(shown_, field_);
+  image_now();  // the ultrasound at once (the take has ended: no new frame would ask for it)
   answers_->setVisible(false);
   next_button_->setVisible(false);
   const exercise::Assessment& a = *figures_.assessment;

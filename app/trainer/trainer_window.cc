@@ -76,6 +76,12 @@ TrainerWindow::TrainerWindow(const config::Scene& scene, const TrainerOptions& s
   column->addWidget(frame_plot_, 1);
   column->addWidget(margin_plot_, 1);
   column->addWidget(energy_plot_, 1);
+  if (window_options_.exercise.on) {
+    // A trainee's window: the guide where the stability margin and port energy plots were, and room
+    // for the ultrasound image under it once the answer is shown.
+    margin_plot_->hide(), energy_plot_->hide();
+    ultrasound_->setMinimumSize(kImageSize + 8, kImageSize + 8);
+  }
   auto* split = new QSplitter(this);
   split->addWidget(vtk_widget_);
   split->addWidget(side);
@@ -240,7 +246,16 @@ void TrainerWindow::start_take(const std::optional<std::filesystem::path>& recor
   reset_camera();
   std::string text;
   for (const auto& m : messages) text += m + "  ";
-  if (recording) text += "recording to " + recording->string();
+  if (recording) {
+    text += "recording to " + recording->string();
+    // The mesh the take is made on, beside it: `fetouch review` draws the take over it.
+    const std::filesystem::path anatomy = anatomy_beside(*recording);
+    try {
+      write_tissue_vtu(session_->mesh(), {}, anatomy);
+    } catch (const std::exception& e) {
+      text += " (" + std::string(e.what()) + ": the take cannot be reviewed)";
+    }
+  }
   message_->setText(QString::fromStdString(text));
   ++takes_;
   mode_request_ = 0;
@@ -322,8 +337,16 @@ void TrainerWindow::tick() {
   if (!session_->running() && window_options_.headless) {
     figures_.error = session_->error();
     // A scripted exercise answers when its take ends (what it was given, else nothing).
-    if (figures_.error.empty() && window_options_.exercise.on && step_ <= exercise::kManeuvers)
-      answer(window_options_.exercise.answers.value_or(exercise::Answers{}));
+    if (figures_.error.empty() && window_options_.exercise.on && step_ <= exercise::kManeuvers) {
+      const exercise::Answers given = window_options_.exercise.answers.value_or(exercise::Answers{});
+      if (window_options_.exercise.step_screenshots) {  // the answers step as the trainee sees it
+        step_ = exercise::kManeuvers;
+        show_exercise_step();
+        choose_answers(given);
+        picture_step("answers.png");
+      }
+      answer(given);
+    }
     if (window_options_.screenshot && figures_.error.empty()) {
       if (!save_screenshot(*window_options_.screenshot))
         figures_.error = "cannot write the screenshot " + window_options_.screenshot->string();
@@ -335,6 +358,18 @@ void TrainerWindow::tick() {
     timer_->stop();
     close();
   }
+}
+
+void TrainerWindow::image_now() {
+  if (!session_ || !imager_ || shown_.patch_centre.empty()) return;
+  const int probe = std::max(0, session_->cursor_probe());
+  plane_ = probe_plane(shown_.patch_centre[probe], shown_.patch_normal[probe], lateral_x_ ? Eigen::Vector3d::UnitX() : Eigen::Vector3d::UnitY(),
+                       kImageWidthM, kImageDepthM, kImageSize, kImageSize);
+  imager_->make_now(shown_.frame, shown_.displacement, plane_, image_);
+  imaged_frame_ = shown_.frame, imaged_at_ = shown_.patch_centre[probe];
+  // The image's label may just have been shown: laid out first, so that the picture fits it.
+  if (QLayout* column = ultrasound_->parentWidget()->layout()) column->activate();
+  show_ultrasound();
 }
 
 void TrainerWindow::show_ultrasound() {

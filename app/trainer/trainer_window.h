@@ -44,6 +44,9 @@ struct ExerciseOptions {
   std::optional<exercise::Answers> answers;
   double comfort_limit_n = 0;  // 0: none stated
   std::string comfort_limit_source;
+  // Pictures of each step (docs, tests): DIR/step-K.png 1.7 s (simulated) into maneuver K, when a
+  // scripted hand holds its first press; DIR/answers.png with the answers chosen, before they are given.
+  std::optional<std::filesystem::path> step_screenshots;
 };
 
 struct WindowOptions {
@@ -123,6 +126,7 @@ class TrainerWindow : public QMainWindow {
   void start_take(const std::optional<std::filesystem::path>& recording);
   void tick();
   void show_ultrasound();
+  void image_now();  // the ultrasound image through the first probe's patch, made here and shown
   void update_status();
   void take_mode_verdict();
   void show_mode();
@@ -131,6 +135,8 @@ class TrainerWindow : public QMainWindow {
   QWidget* build_exercise_panel();
   void show_exercise_step();
   void exercise_tick();
+  void picture_step(const std::string& name);
+  void choose_answers(const exercise::Answers& given);
   void hide_the_answer(bool hidden);
   double simulated_s();
 
@@ -181,6 +187,7 @@ class TrainerWindow : public QMainWindow {
   QWidget* answers_ = nullptr;
   int step_ = 0;
   std::array<double, exercise::kManeuvers - 1> next_times_{};
+  std::array<bool, exercise::kManeuvers> step_pictured_{};
 };
 
 }  // namespace fetouch::app::trainer

@@ -8,10 +8,17 @@
 //     (1500 N/m), the wrong
 //     presentation: the two-handed grips (umbilical, pelvic) lose their right hand's zone, the fundal
 //     and Pawlik's grips still reach the midline poles, the presentation is wrong, the force passes a
-//     limit set at 1.3 times the good take's largest force and the coverage drops.
+//     limit set at 1.3 times the good take's largest force and the coverage drops;
+//   - `fetouch review` of the good take: its screenshot with the paths differs from the one without
+//     them where the recorded presses project through the view's camera (the projection done here),
+//     is red where the largest force was pressed, and is the same far from every path.
 // The expectations come from the label map and the scripts, not from the program.
+#include <Eigen/Geometry>
 #include <gtest/gtest.h>
 #include <unistd.h>
+#include <vtkImageData.h>
+#include <vtkNew.h>
+#include <vtkPNGReader.h>
 #include <yaml-cpp/yaml.h>
 
 #include <cmath>
@@ -19,6 +26,7 @@
 #include <fstream>
 
 #include "app/exercise/leopold.h"
+#include "app/recording.h"
 #include "tests/support/run_command.h"
 #include "tests/support/scene_variant.h"
 
@@ -151,7 +159,7 @@ struct TakeResult {
 // One take: the script, the scene with the two hands on it (virtual operators of the given
 // stiffness), the real `fetouch trainer` in lockstep, the assessment it wrote.
 TakeResult run_take(const fs::path& dir, double depth_mm, double hand_n_per_m, bool left_only, const std::string& answers,
-                    double limit_n) {
+                    double limit_n, const std::string& pictures = "") {
   const imaging::PhantomGeometry g = exercise_phantom();
   const AbdomenMap map(g);
   const Script s = leopold_script(g, map, depth_mm, left_only);
@@ -172,10 +180,112 @@ TakeResult run_take(const fs::path& dir, double depth_mm, double hand_n_per_m, b
                         " --maneuvers " + times + " --answers " + answers + " --duration " + std::to_string(s.t + 0.3) +
                         " --clock lockstep --out " + (dir / "out").string() + " --json";
   if (limit_n > 0) command += " --comfort-limit " + std::to_string(limit_n);
+  if (!pictures.empty()) command += " --step-screenshots " + pictures + " --screenshot " + pictures + "/revealed.png";
   const auto r = run_command(fetouch(command));
   TakeResult result{r.exit_code, r.err, {}};
   if (r.exit_code == 0) result.assessment = YAML::LoadFile((dir / "out" / "exercise" / "assessment.json").string());
   return result;
+}
+
+// A screenshot read back: its pixels by (column, row from the top).
+struct Picture {
+  vtkNew<vtkPNGReader> reader;
+  int width = 0, height = 0;
+  explicit Picture(const fs::path& png) {
+    reader->SetFileName(png.string().c_str());
+    reader->Update();
+    int dims[3];
+    reader->GetOutput()->GetDimensions(dims);
+    width = dims[0], height = dims[1];
+  }
+  std::array<int, 3> at(int x, int y) const {
+    std::array<int, 3> c{};
+    if (x < 0 || y < 0 || x >= width || y >= height) return c;
+    for (int k = 0; k < 3; ++k) c[k] = static_cast<int>(reader->GetOutput()->GetScalarComponentAsDouble(x, height - 1 - y, 0, k));
+    return c;
+  }
+};
+
+// The pixel of the screenshot where a point (m) is drawn: a pinhole camera as the JSON describes it
+// (vertical view angle), in the view's rectangle.
+Eigen::Vector2d project(const YAML::Node& shown, const Eigen::Vector3d& p) {
+  const auto vec = [](const YAML::Node& n) { return Eigen::Vector3d(n[0].as<double>(), n[1].as<double>(), n[2].as<double>()); };
+  const YAML::Node& c = shown["camera"];
+  const Eigen::Vector3d eye = vec(c["position"]), d = (vec(c["focal_point"]) - eye).normalized();
+  const Eigen::Vector3d right = d.cross(vec(c["view_up"])).normalized(), up = right.cross(d);
+  const double w = shown["view"]["width"].as<double>(), h = shown["view"]["height"].as<double>();
+  const double tan_half = std::tan(0.5 * c["view_angle_deg"].as<double>() * M_PI / 180);
+  const Eigen::Vector3d v = p - eye;
+  const double depth = v.dot(d);
+  const double x = v.dot(right) / (depth * tan_half) * (h / w), y = v.dot(up) / (depth * tan_half);
+  return {shown["view"]["x"].as<double>() + 0.5 * (x + 1) * w, shown["view"]["y"].as<double>() + 0.5 * (1 - y) * h};
+}
+
+// `fetouch review` of an exercise's folder draws the recorded paths over the anatomy.
+void check_review(const fs::path& exercise_dir) {
+  const fs::path with = exercise_dir / "review.png", without = exercise_dir / "review-no-paths.png";
+  const auto shot = [&](const fs::path& png, bool paths) {
+    const auto r = run_command(fetouch("review " + exercise_dir.string() + " --screenshot " + png.string() + " --json" +
+                                       (paths ? "" : " --no-paths")));
+    EXPECT_EQ(r.exit_code, 0) << r.err;
+    return r.exit_code == 0 ? YAML::Load(r.out) : YAML::Node();
+  };
+  const YAML::Node shown = shot(with, true), bare = shot(without, false);
+  ASSERT_TRUE(shown && bare);
+  ASSERT_TRUE(shown["exercise"].as<bool>());
+  EXPECT_EQ(shown["answer_score"].as<double>(), 3);
+  ASSERT_FALSE(shown["camera"]["parallel"].as<bool>());
+  const Picture a(with), b(without);
+  ASSERT_EQ(a.width, b.width);
+  ASSERT_EQ(a.height, b.height);
+  const app::Recording take = app::read_recording(exercise_dir / "take.h5");
+  ASSERT_EQ(take.devices.size(), 2u);
+  // Every 50th tick of each press projected: the picture with paths differs there (within 2 px).
+  std::vector<Eigen::Vector2d> drawn;
+  int presses = 0, marked = 0;
+  double largest = 0;
+  Eigen::Vector2d hardest = Eigen::Vector2d::Zero();
+  for (const app::RecordedDevice& d : take.devices)
+    for (std::size_t i = 0; i < d.samples.size(); i += 10) {
+      const Eigen::Vector2d px = project(shown, d.samples[i].position);
+      drawn.push_back(px);
+      if (!d.samples[i].in_contact) continue;
+      if (d.samples[i].force.norm() > largest) largest = d.samples[i].force.norm(), hardest = px;
+      if (i % 50 != 0) continue;
+      ++presses;
+      bool differs = false;
+      for (int dx = -2; dx <= 2; ++dx)
+        for (int dy = -2; dy <= 2; ++dy) {
+          const auto p = a.at(int(px.x()) + dx, int(px.y()) + dy), q = b.at(int(px.x()) + dx, int(px.y()) + dy);
+          differs = differs || std::abs(p[0] - q[0]) + std::abs(p[1] - q[1]) + std::abs(p[2] - q[2]) > 90;
+        }
+      marked += differs;
+    }
+  ASSERT_GT(presses, 50);
+  EXPECT_GE(marked, presses * 95 / 100) << marked << " of " << presses << " pressed points drawn";
+  // Where the largest force was pressed: red (the top of the force scale).
+  bool red = false;
+  for (int dx = -2; dx <= 2; ++dx)
+    for (int dy = -2; dy <= 2; ++dy) {
+      const auto p = a.at(int(hardest.x()) + dx, int(hardest.y()) + dy);
+      red = red || (p[0] > 200 && p[1] < 110 && p[2] < 90);
+    }
+  EXPECT_TRUE(red) << "no red at " << hardest.transpose();
+  // Far (over 20 px) from every path point, the two pictures are the same: the middle 70 % of the
+  // view across (the force's colour bar is on its left).
+  const double x0 = shown["view"]["x"].as<double>(), y0 = shown["view"]["y"].as<double>();
+  const double w = shown["view"]["width"].as<double>(), h = shown["view"]["height"].as<double>();
+  long far = 0, same = 0;
+  for (int y = int(y0 + 10); y < int(y0 + h - 10); y += 7)
+    for (int x = int(x0 + 0.15 * w); x < int(x0 + 0.85 * w); x += 7) {
+      const Eigen::Vector2d here(x, y);
+      if (std::any_of(drawn.begin(), drawn.end(), [&](const Eigen::Vector2d& p) { return (p - here).norm() < 20; })) continue;
+      ++far;
+      same += a.at(x, y) == b.at(x, y);
+    }
+  ASSERT_GT(far, 1000);
+  EXPECT_GE(same, far * 99 / 100) << same << " of " << far << " pixels far from the paths unchanged";
+  std::printf("review: %d of %d pressed points drawn; %ld of %ld pixels far from the paths unchanged\n", marked, presses, same, far);
 }
 
 TEST(TrainerExercise, AGoodTakeScoresRightAndABadOneIsScoredDownWhereItFailed) {
@@ -186,7 +296,9 @@ TEST(TrainerExercise, AGoodTakeScoresRightAndABadOneIsScoredDownWhereItFailed) {
   fs::remove_all(dir);
   const std::string right = std::string(config::to_string(pose.lie)) + "," + config::to_string(pose.presentation) + "," +
                             config::to_string(pose.back);
-  const TakeResult good = run_take(dir / "good", 14, 300, false, right, 0);
+  // FETOUCH_EXERCISE_PICTURES=DIR: the good take's steps pictured there (docs/trainer.md's walkthrough).
+  const char* pictures = std::getenv("FETOUCH_EXERCISE_PICTURES");
+  const TakeResult good = run_take(dir / "good", 14, 300, false, right, 0, pictures ? pictures : "");
   ASSERT_EQ(good.exit_code, 0) << good.err;
   const YAML::Node& a = good.assessment;
   for (const auto& answer : a["answers"]) EXPECT_EQ(answer["score"].as<double>(), 1) << answer["asked"].as<std::string>();
@@ -196,6 +308,8 @@ TEST(TrainerExercise, AGoodTakeScoresRightAndABadOneIsScoredDownWhereItFailed) {
   }
   const double good_force = a["largest_force_n"].as<double>(), good_cover = a["covered_share"].as<double>();
   std::printf("good take: largest force %.2f N, covered %.0f %%\n", good_force, 100 * good_cover);
+  check_review(dir / "good" / "out" / "exercise");
+  if (pictures) fs::copy_file(dir / "good" / "out" / "exercise" / "review.png", fs::path(pictures) / "review.png", fs::copy_options::overwrite_existing);
 
   const std::string wrong = std::string(config::to_string(pose.lie)) + "," +
                             (pose.presentation == config::FetalPresentation::cephalic ? "breech" : "cephalic") + "," +

@@ -1,6 +1,8 @@
 // The trainer window's controls driven by QTest (label gui, under Xvfb): pause stops simulated
 // time (the tick count does not grow), reset returns the tissue to rest (displacement 0 in the
-// snapshot), record writes a take that `fetouch replay` accepts, switching the local model and
+// snapshot), record writes a take that `fetouch replay` accepts and its anatomy beside it, which
+// reads back as the session's mesh (its outer surface found again from the tetrahedra alone) and
+// which the review window opens and scrubs, switching the local model and
 // hold with the keys is applied with robust gains or refused with the reason on screen, and keys
 // move the mouse probe's cursor into the tissue so that its force rises with depth.
 #include <gtest/gtest.h>
@@ -23,10 +25,12 @@
 #include <fstream>
 #include <memory>
 #include <regex>
+#include <set>
 #include <sstream>
 
 #include "app/recording.h"
 #include "app/scene_mesh.h"
+#include "app/trainer/review_window.h"
 #include "app/trainer/tissue_view.h"
 #include "app/trainer/trainer_window.h"
 #include "meshes/interface_quality.h"
@@ -177,6 +181,32 @@ TEST_F(TrainerWindowTest, PauseStopsTimeResetReturnsToRestRecordReplays) {
   const auto replay = run_command(fetouch("replay " + (fs::path(FETOUCH_SOURCE_DIR) / "config/scenes/fetus_simple.yaml").string() +
                                           " --trajectory " + take.string() + " --mesh-every 0 --out " + (out_ / "replayed").string()));
   EXPECT_EQ(replay.exit_code, 0) << replay.err;
+  // Its anatomy: the session's mesh, read back.
+  const fs::path anatomy = out_ / (take.stem().string() + ".anatomy.vtu");
+  ASSERT_TRUE(fs::exists(anatomy));
+  const app::trainer::ReviewTake review = app::trainer::load_review_take(out_, take.filename());
+  const app::trainer::MeshView& mesh = w.session()->mesh();
+  EXPECT_EQ(review.anatomy_file, anatomy);
+  EXPECT_EQ(review.anatomy.points.size(), mesh.points.size());
+  EXPECT_EQ(review.anatomy.tetrahedra, mesh.tetrahedra);
+  EXPECT_EQ(review.anatomy.material, mesh.material);
+  EXPECT_EQ(review.anatomy.region_name, mesh.region_name);
+  // The solver's boundary faces against those no second tetrahedron shares.
+  ASSERT_EQ(review.anatomy.boundary_triangles.size(), mesh.boundary_triangles.size());
+  std::set<std::array<unsigned int, 3>> solver_faces, read_faces;
+  for (auto f : mesh.boundary_triangles) std::sort(f.begin(), f.end()), solver_faces.insert(f);
+  for (auto f : review.anatomy.boundary_triangles) std::sort(f.begin(), f.end()), read_faces.insert(f);
+  EXPECT_EQ(read_faces, solver_faces);
+  EXPECT_FALSE(review.scores);
+  EXPECT_GT(review.duration_s, 1.0);
+  app::trainer::ReviewWindow r(review, {});
+  r.show();
+  EXPECT_DOUBLE_EQ(r.time_shown(), review.duration_s);  // the take's end first
+  r.show_time(0.5);
+  EXPECT_DOUBLE_EQ(r.time_shown(), 0.5);
+  r.show_time(1e6);
+  EXPECT_DOUBLE_EQ(r.time_shown(), review.duration_s);
+  EXPECT_EQ(r.maneuver_at(0.5), -1);  // not an exercise
 }
 
 // What the hand feels, said in the window: on the default-like anatomy the status line shows the
