@@ -148,9 +148,22 @@ void TrainerWindow::move_cursor_along_view(double metres) {
   set_cursor(cursor_ + metres * Eigen::Vector3d(p[0], p[1], p[2]));
 }
 
+bool TrainerWindow::switch_hand() {
+  if (!session_ || !session_->switch_cursor()) {
+    message_->setText("the mouse drives one hand only here");
+    return false;
+  }
+  const int p = session_->cursor_probe();
+  cursor_ = cursor_targets_[p];
+  view_->show_cursor(true, cursor_);
+  message_->setText(QString::fromStdString("the mouse drives " + session_->probe_names()[p] + "; the other hand holds where it is"));
+  return true;
+}
+
 void TrainerWindow::set_cursor(const Eigen::Vector3d& at) {
   if (!session_ || !session_->cursor()) return;
   cursor_ = at;
+  cursor_targets_[session_->cursor_probe()] = at;
   session_->cursor()->set_target(cursor_);
   view_->show_cursor(true, cursor_);
 }

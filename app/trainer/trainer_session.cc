@@ -65,6 +65,7 @@ TrainerSession::TrainerSession(const config::Scene& scene, const TrainerOptions&
   }
   // The devices, and where each one's contact patch starts.
   long ticks = -1;
+  cursors_.assign(scene_.probes.size(), nullptr);
   for (int p = 0; p < static_cast<int>(scene_.probes.size()); ++p) {
     const config::Probe& probe = scene_.probes[p];
     std::optional<haptics::Trajectory> path;
@@ -75,17 +76,13 @@ TrainerSession::TrainerSession(const config::Scene& scene, const TrainerOptions&
         devices_.push_back(make_device(probe, scene_, settings_.loop, nullptr));
         start = dynamic_cast<haptics::PhantomDevice&>(*devices_.back()).position_now();
       } catch (const std::exception& e) {
-        if (!cursor_) {
+        mouse = true;
+        if (cursor_probe_ < 0) {
           messages.push_back(std::string(e.what()) + "; the mouse drives probe " + probe.name + " instead");
-          mouse = true;
         } else {
-          // The mouse drives another probe already: this one rests 4 cm to the side, above the tissue.
-          messages.push_back(std::string(e.what()) + "; probe " + probe.name + " rests above the tissue");
+          // The mouse drives another probe first: this one waits 4 cm to the side, above the tissue.
+          messages.push_back(std::string(e.what()) + "; the mouse drives probe " + probe.name + " too (Tab: the next hand)");
           start += Eigen::Vector3d(0, 0.04 * (p % 2 ? 1 : -1), 0);
-          haptics::Trajectory still;
-          still.times_s = {0, 60 * options.max_minutes + 1};
-          still.positions_m = {start, start};
-          devices_.push_back(std::make_unique<haptics::ReplayDevice>(still, settings_.loop.period_s));
         }
       }
     } else if (!mouse) {
@@ -100,10 +97,9 @@ TrainerSession::TrainerSession(const config::Scene& scene, const TrainerOptions&
       throw std::runtime_error("probe " + probe.name + ": lockstep (--clock lockstep) needs every probe scripted, and this one is " +
                                (mouse ? "the mouse's" : "a PHANTOM") + "; give it a trajectory (type: replay or operator)");
     if (mouse) {
-      if (cursor_) throw std::runtime_error("probe " + probe.name + ": the mouse drives one probe only (" +
-                                            scene_.probes[cursor_probe_].name + " already)");
       auto cursor = std::make_unique<haptics::CursorOperator>(start, kMouseHand, settings_.loop.period_s);
-      cursor_ = cursor.get(), cursor_probe_ = p;
+      cursors_[p] = cursor.get();
+      if (cursor_probe_ < 0) cursor_probe_ = p;
       devices_.push_back(std::move(cursor));
     }
     const dealii::Point<3> touch = solver.boundary_point_nearest(dealii::Point<3>(start[0], start[1], start[2]));
@@ -115,7 +111,7 @@ TrainerSession::TrainerSession(const config::Scene& scene, const TrainerOptions&
   const double rate = scene_.haptics.rate_hz;
   if (options.duration_s > 0)
     settings_.max_ticks = std::lround(options.duration_s * rate);
-  else if (cursor_ || ticks < 0)
+  else if (cursor_probe_ >= 0 || ticks < 0)
     settings_.max_ticks = std::lround(options.max_minutes * 60 * rate);
   auto environment = std::make_unique<fem::FemEnvironment>(std::move(model->solver), model->newton);
   fem::FemEnvironment& fem = *environment;
@@ -180,6 +176,21 @@ void TrainerSession::start() {
     }
     running_ = false;
   });
+}
+
+int TrainerSession::mouse_probes() const {
+  return static_cast<int>(std::count_if(cursors_.begin(), cursors_.end(), [](const auto* c) { return c != nullptr; }));
+}
+
+bool TrainerSession::switch_cursor() {
+  if (mouse_probes() < 2) return false;
+  const int n = static_cast<int>(cursors_.size());
+  for (int k = 1; k < n; ++k)
+    if (cursors_[(cursor_probe_ + k) % n]) {
+      cursor_probe_ = (cursor_probe_ + k) % n;
+      return true;
+    }
+  return false;
 }
 
 void TrainerSession::wait() {

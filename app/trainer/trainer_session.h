@@ -94,9 +94,17 @@ class TrainerSession {
   const TissueSnapshot& snapshot() const { return snapshots_.front(); }
   void want_stress(bool on) { want_stress_ = on; }
   SessionMonitor& monitor() { return monitor_; }
-  // The probe the mouse drives (nullptr when none does): the window sets its target.
-  haptics::CursorOperator* cursor() { return cursor_; }
+  // The probe the mouse drives now (nullptr when none does): the window sets its target. Every
+  // `type: mouse` probe, and every PHANTOM not found, is the mouse's; it drives one at a time, and
+  // the others hold where it left them (a steadying hand) until switch_cursor() comes to them.
+  haptics::CursorOperator* cursor() { return cursor_probe_ < 0 ? nullptr : cursors_[cursor_probe_]; }
   int cursor_probe() const { return cursor_probe_; }
+  haptics::CursorOperator* cursor_of(int probe) {
+    return probe >= 0 && probe < static_cast<int>(cursors_.size()) ? cursors_[probe] : nullptr;
+  }
+  int mouse_probes() const;
+  // The mouse on to the next of its probes (in the scene's order, round); false when it has one or none.
+  bool switch_cursor();
   const std::vector<std::string>& probe_names() const { return settings_.probes; }
   double solver_period_s() const { return settings_.loop.period_s * settings_.loop.ratio; }
 
@@ -108,7 +116,7 @@ class TrainerSession {
   std::unique_ptr<fem::TissueModel> model_;  // its mesh and materials, which the solver refers to
   std::unique_ptr<haptics::Environment> environment_;
   std::vector<std::unique_ptr<haptics::Device>> devices_;
-  haptics::CursorOperator* cursor_ = nullptr;
+  std::vector<haptics::CursorOperator*> cursors_;  // per probe: its cursor, or null (held in devices_)
   int cursor_probe_ = -1;
   MeshView mesh_;
   haptics::TripleBuffer<TissueSnapshot> snapshots_{TissueSnapshot{}};

@@ -142,6 +142,7 @@ TrainerWindow::TrainerWindow(const config::Scene& scene, const TrainerOptions& s
   action("Hold", QKeySequence(Qt::Key_H), [this] {
     ask_mode(asked_model_, asked_hold_ == haptics::HoldKind::zoh ? haptics::HoldKind::foh : haptics::HoldKind::zoh);
   });
+  action("Hand", QKeySequence(Qt::Key_Tab), [this] { switch_hand(); });
   action("Quit", QKeySequence(Qt::CTRL | Qt::Key_Q), [this] { close(); });
   addToolBarBreak();
   regions_bar_ = addToolBar("regions");
@@ -224,12 +225,14 @@ void TrainerWindow::start_take(const std::optional<std::filesystem::path>& recor
   last_frame_ = -2, frames_seen_ = 0, overruns_ = 0, imaged_frame_ = -3;
   session_->want_stress(field_ == ColourField::von_mises);
   if (session_->take_snapshot()) shown_ = session_->snapshot();
-  if (session_->cursor()) {
-    cursor_ = shown_.patch_centre.empty() ? Eigen::Vector3d::Zero()
-                                          : Eigen::Vector3d(shown_.patch_centre[session_->cursor_probe()] +
-                                                            0.01 * shown_.patch_normal[session_->cursor_probe()]);
-    session_->cursor()->set_target(cursor_);
-  }
+  // Each mouse probe's cursor 1 cm out from its patch; the mouse drives the first.
+  cursor_targets_.assign(radii.size(), Eigen::Vector3d::Zero());
+  for (int p = 0; p < static_cast<int>(radii.size()); ++p)
+    if (haptics::CursorOperator* c = session_->cursor_of(p)) {
+      if (p < static_cast<int>(shown_.patch_centre.size())) cursor_targets_[p] = shown_.patch_centre[p] + 0.01 * shown_.patch_normal[p];
+      c->set_target(cursor_targets_[p]);
+    }
+  if (session_->cursor()) cursor_ = cursor_targets_[session_->cursor_probe()];
   view_->update_tissue(shown_, field_);
   view_->show_cursor(session_->cursor() != nullptr, cursor_);
   regions_bar_->clear();
@@ -410,7 +413,10 @@ void TrainerWindow::update_status() {
       s << "   " << names[i] << " felt " << std::lround(p.identified_stiffness_n_per_m) << " / tissue "
         << std::lround(p.condensed_stiffness_n_per_m) << " N/m";
   }
-  if (session_->cursor()) s << "   mouse: shift+move, shift+wheel or [ ] to push";
+  if (session_->cursor()) {
+    s << "   mouse: shift+move, shift+wheel or [ ] to push";
+    if (session_->mouse_probes() > 1) s << " " << session_->probe_names()[session_->cursor_probe()] << " (Tab: the next hand)";
+  }
   status_->setText(QString::fromStdString(s.str()));
 }
 

@@ -108,6 +108,9 @@ class TrainerWindow : public QMainWindow {
   const TissueSnapshot& shown() const { return shown_; }  // the tissue state on screen
   const Eigen::Vector3d& cursor() const { return cursor_; }
   void set_cursor(const Eigen::Vector3d& at);  // the mouse cursor's place (a mouse probe follows it)
+  // The mouse on to the next probe it drives (Tab), the one it leaves holding where it is; false
+  // (the reason on the message line) when it drives one probe or none.
+  bool switch_hand();
   // The 3D view (null while no session runs) and the toolbar's region toggles: hiding a region shows
   // what its surfaces covered; kept across takes and scenes by name. False: no such region.
   TissueView* view() { return view_.get(); }
@@ -170,6 +173,7 @@ class TrainerWindow : public QMainWindow {
   bool start_pending_ = false;  // the take's session starts at the next tick
   bool lateral_x_ = true;
   Eigen::Vector3d cursor_ = Eigen::Vector3d::Zero();
+  std::vector<Eigen::Vector3d> cursor_targets_;  // per probe: where the mouse left its cursor
   UltrasoundImage image_;  // the one shown
   SlicePlane plane_;       // the newest asked for
   std::optional<std::filesystem::path> recording_;

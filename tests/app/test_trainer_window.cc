@@ -23,6 +23,7 @@
 #include <map>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <memory>
 #include <regex>
 #include <set>
@@ -242,6 +243,44 @@ TEST_F(TrainerWindowTest, TheStatusLineSaysWhatTheHandFeelsAndWhenThePassivityLa
     ASSERT_TRUE(w.session());
     EXPECT_NE(wait_for(w, "PASSIVITY: ", 3000), "") << w.status();
   }
+}
+
+// Two hands and one mouse (leopold.yaml's two PHANTOMs absent): the mouse drives the left hand;
+// pressed in, it holds there while Tab gives the mouse the right hand, which presses in beside it;
+// Tab again comes back to the left hand's cursor where it was left.
+TEST_F(TrainerWindowTest, TheMouseDrivesEitherHandAndTheOtherHoldsWhereItWasLeft) {
+  app::trainer::WindowOptions options;
+  options.out = out_;
+  TrainerWindow w(scene("leopold.yaml"), {}, options);
+  w.show();
+  QApplication::setActiveWindow(&w);
+  ASSERT_TRUE(w.session() && w.session()->cursor());
+  if (w.session()->mouse_probes() != 2) GTEST_SKIP() << "a PHANTOM was found: the mouse drives " << w.session()->mouse_probes() << " hands";
+  EXPECT_EQ(w.session()->cursor_probe(), 0);
+  const auto force = [&w](int p) { return w.session()->monitor().force_n[p].load(); };
+  const auto wait_until = [](const std::function<bool()>& done, int ms) {
+    for (int waited = 0; waited < ms && !done(); waited += 20) QTest::qWait(20);
+    return done();
+  };
+  // The left hand 15 mm in from 1 cm out.
+  w.set_cursor(w.cursor() - 0.025 * w.shown().patch_normal[0]);
+  ASSERT_TRUE(wait_until([&] { return force(0) > 0.2; }, 15000)) << "left hand: " << force(0) << " N";
+  QTest::qWait(500);
+  const Eigen::Vector3d left_cursor = w.cursor();
+  const double left_force = force(0);
+  EXPECT_LT(force(1), 1e-6) << "the right hand waits above the tissue";
+  QTest::keyClick(&w, Qt::Key_Tab);
+  ASSERT_EQ(w.session()->cursor_probe(), 1);
+  EXPECT_NE(w.message().find("the mouse drives right"), std::string::npos) << w.message();
+  w.set_cursor(w.cursor() - 0.025 * w.shown().patch_normal[1]);
+  ASSERT_TRUE(wait_until([&] { return force(1) > 0.2; }, 15000)) << "right hand: " << force(1) << " N";
+  QTest::qWait(500);
+  std::printf("left hand %.3f N alone, %.3f N with the right one pressing %.3f N beside it\n", left_force, force(0), force(1));
+  EXPECT_GT(force(0), 0.5 * left_force) << "the left hand holds its press";
+  EXPECT_LT(force(0), 2.0 * left_force);
+  QTest::keyClick(&w, Qt::Key_Tab);
+  EXPECT_EQ(w.session()->cursor_probe(), 0);
+  EXPECT_EQ(w.cursor(), left_cursor);
 }
 
 // The displacement along -n of the patch at `patch` under a force f along -n, by `fetouch solve`.
