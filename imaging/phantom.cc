@@ -91,6 +91,10 @@ double reflectance(std::uint8_t above, std::uint8_t below) {
   return 0.03;
 }
 
+FetalGrowth settings_growth(const PhantomSettings& s) {
+  return s.gestational_age_weeks ? growth_at(*s.gestational_age_weeks) : FetalGrowth{};
+}
+
 }  // namespace
 
 std::uint8_t PhantomGeometry::label_at(const std::array<double, 3>& x) const {
@@ -173,11 +177,15 @@ PhantomGeometry phantom_geometry(std::uint32_t seed, const std::array<double, 3>
   return g;
 }
 
+PhantomGeometry phantom_geometry(const PhantomSettings& s) {
+  return phantom_geometry(s.seed, s.fetus_offset_mm, s.fetus_orientation, settings_growth(s));
+}
+
 Phantom make_phantom(const PhantomSettings& s) {
   if (!(s.spacing_mm > 0)) throw std::invalid_argument("phantom: the spacing must be positive");
   Phantom p;
-  const FetalGrowth growth = s.gestational_age_weeks ? growth_at(*s.gestational_age_weeks) : FetalGrowth{};
-  p.geometry = phantom_geometry(s.seed, s.fetus_offset_mm, s.fetus_orientation, growth);
+  const FetalGrowth growth = settings_growth(s);
+  p.geometry = phantom_geometry(s);
   std::array<int, 3> n{};
   double voxels = 1;
   for (int d = 0; d < 3; ++d) {

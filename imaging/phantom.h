@@ -113,6 +113,9 @@ struct Phantom {
 PhantomGeometry phantom_geometry(std::uint32_t seed, const std::array<double, 3>& fetus_offset_mm = {0, 0, 0},
                                  const std::optional<PhantomSettings::Orientation>& orientation = std::nullopt,
                                  const FetalGrowth& growth = {});
+// The shapes make_phantom(settings) draws: its seed, offset and orientation, grown to its gestational
+// age (growth_at) when it has one. Throws as above.
+PhantomGeometry phantom_geometry(const PhantomSettings& settings);
 // Throws std::invalid_argument for a spacing or size that is not positive, or a volume over 2^31 voxels.
 Phantom make_phantom(const PhantomSettings& settings);
 

@@ -12,7 +12,6 @@
 #include "app/recording.h"
 #include "app/scene_mesh.h"
 #include "app/trainer/trainer_window.h"
-#include "imaging/fetal_biometry.h"
 
 namespace fetouch::app::trainer {
 
@@ -20,9 +19,7 @@ namespace {
 
 // The phantom's shapes as the scene's mesh was made from them (metres there: millimetres / 1000).
 imaging::PhantomGeometry scene_phantom(const config::Scene& scene) {
-  const imaging::PhantomSettings s = phantom_settings(scene.mesh.phantom);
-  const imaging::FetalGrowth growth = s.gestational_age_weeks ? imaging::growth_at(*s.gestational_age_weeks) : imaging::FetalGrowth{};
-  return imaging::phantom_geometry(s.seed, s.fetus_offset_mm, s.fetus_orientation, growth);
+  return imaging::phantom_geometry(phantom_settings(scene.mesh.phantom));
 }
 
 QComboBox* choices(QWidget* parent, const std::vector<std::string>& names) {
