@@ -90,11 +90,7 @@ int run_review(const ReviewCommandOptions& o) {
     json.key("paths").value(!o.no_paths);
     json.key("path_force_range_n").value(window.path_force_range_n());
     json.key("exercise").value(t.scores.has_value());
-    if (t.scores) json.key("answer_score").value([&] {
-      double sum = 0;
-      for (const auto& a : t.scores->answers) sum += a.score;
-      return sum;
-    }());
+    if (t.scores) json.key("answer_score").value(t.scores->answer_score());
     json.key("screenshot").value(o.screenshot);
     // Where the 3D view is in the screenshot, and its camera: enough to find a point's pixel.
     const trainer::ReviewWindow::Rect r = window.view_rect();

@@ -51,6 +51,11 @@ struct ReviewScores {
   std::vector<Maneuver> maneuvers;
   double duration_s = 0, largest_force_n = 0, comfort_limit_n = 0, time_over_limit_s = 0, covered_share = 0;
   std::string comfort_limit_source;
+  double answer_score() const {  // the answers' scores summed, as Assessment::answer_score
+    double sum = 0;
+    for (const Answer& a : answers) sum += a.score;
+    return sum;
+  }
 };
 
 struct ReviewTake {
