@@ -283,6 +283,7 @@ ReviewWindow::ReviewWindow(ReviewTake take, const ReviewOptions& options) : take
   slider_ = new QSlider(Qt::Horizontal, this);
   slider_->setRange(0, static_cast<int>(std::lround(1e3 * take_.duration_s)));  // ms
   slider_->setMinimumWidth(600);
+  slider_->setSingleStep(100), slider_->setPageStep(1000);  // arrows 0.1 s, page keys 1 s
   connect(slider_, &QSlider::valueChanged, this, [this](int ms) {
     if (std::lround(1e3 * time_s_) != ms) show_time(1e-3 * ms);
   });

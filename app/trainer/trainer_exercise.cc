@@ -11,6 +11,7 @@
 
 #include "app/recording.h"
 #include "app/scene_mesh.h"
+#include "app/trainer/review_window.h"
 #include "app/trainer/trainer_window.h"
 
 namespace fetouch::app::trainer {
@@ -66,6 +67,11 @@ QWidget* TrainerWindow::build_exercise_panel() {
   next_button_->setShortcut(QKeySequence(Qt::Key_N));
   connect(next_button_, &QPushButton::clicked, this, [this] { next_maneuver(); });
   column->addWidget(next_button_);
+  review_button_ = new QPushButton("Review the take", panel);
+  review_button_->setToolTip("the hands' paths and forces over the fetus, scrubbable in time (fetouch review)");
+  review_button_->setVisible(false);
+  connect(review_button_, &QPushButton::clicked, this, [this] { open_review(); });
+  column->addWidget(review_button_);
   return panel;
 }
 
@@ -184,6 +190,7 @@ bool TrainerWindow::answer(const exercise::Answers& given) {
   image_now();  // the ultrasound at once (the take has ended: no new frame would ask for it)
   answers_->setVisible(false);
   next_button_->setVisible(false);
+  review_button_->setVisible(true);
   const exercise::Assessment& a = *figures_.assessment;
   std::string text = "<b>The fetus: " + config::describe(a.pose) + "</b><br><br>";
   for (const exercise::AnswerResult& r : a.answers)
@@ -194,6 +201,21 @@ bool TrainerWindow::answer(const exercise::Answers& given) {
   guide_->setText(QString::fromStdString(text + line));
   message_->setText(QString::fromStdString("wrote " + (figures_.assessment_dir / "report.md").string()));
   return true;
+}
+
+ReviewWindow* TrainerWindow::open_review() {
+  if (!figures_.assessment) {
+    message_->setText("the take is reviewed once it is assessed (answer first)");
+    return nullptr;
+  }
+  try {
+    review_ = std::make_unique<ReviewWindow>(load_review_take(figures_.assessment_dir), ReviewOptions{});
+  } catch (const std::exception& e) {
+    message_->setText(QString::fromStdString(std::string("the take cannot be reviewed: ") + e.what()));
+    return nullptr;
+  }
+  review_->show();
+  return review_.get();
 }
 
 }  // namespace fetouch::app::trainer

@@ -21,6 +21,7 @@
 #include <sstream>
 
 #include "app/scene_devices.h"
+#include "app/trainer/review_window.h"
 #include "app/trainer/trace_plot.h"
 #include "app/trainer/ultrasound_volume.h"
 #include "app/trainer/view_export.h"

@@ -32,6 +32,7 @@ class vtkRenderer;
 namespace fetouch::app::trainer {
 
 class TracePlot;
+class ReviewWindow;
 
 // The Leopold exercise (docs/trainer.md): the four maneuvers guided one by one with the fetus and
 // the ultrasound hidden, then the answers, then the assessment (app/exercise/leopold.h) written to
@@ -121,6 +122,9 @@ class TrainerWindow : public QMainWindow {
   bool next_maneuver();
   bool answer(const exercise::Answers& answers);
   int exercise_step() const { return step_; }  // 0..3 the maneuvers, 4 the answers, 5 assessed
+  // The assessed take in `fetouch review`'s window, beside this one (null, the reason on the
+  // message line, before the exercise is assessed or if the take cannot be read).
+  ReviewWindow* open_review();
 
  protected:
   bool eventFilter(QObject* watched, QEvent* event) override;
@@ -186,7 +190,8 @@ class TrainerWindow : public QMainWindow {
   WindowFigures figures_;
   TissueSnapshot shown_;
   QLabel* guide_ = nullptr;
-  QPushButton *next_button_ = nullptr, *answer_button_ = nullptr;
+  QPushButton *next_button_ = nullptr, *answer_button_ = nullptr, *review_button_ = nullptr;
+  std::unique_ptr<ReviewWindow> review_;
   QComboBox *lie_box_ = nullptr, *presentation_box_ = nullptr, *back_box_ = nullptr;
   QWidget* answers_ = nullptr;
   int step_ = 0;

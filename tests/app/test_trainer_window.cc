@@ -283,6 +283,35 @@ TEST_F(TrainerWindowTest, TheMouseDrivesEitherHandAndTheOtherHoldsWhereItWasLeft
   EXPECT_EQ(w.cursor(), left_cursor);
 }
 
+// The exercise in the window, answered without palpating (the mouse's hands untouched): the
+// assessment scores it (no maneuver reached, nothing covered), and `Review the take` opens the take
+// in the review window, with the scores.
+TEST_F(TrainerWindowTest, AnAnsweredExerciseOpensItsTakeInTheReviewWindow) {
+  app::trainer::WindowOptions options;
+  options.out = out_;
+  options.exercise.on = true;
+  config::Scene s = scene("leopold.yaml");
+  s.mesh.phantom.pose = config::draw_pose(1);
+  TrainerWindow w(s, {}, options);
+  w.show();
+  ASSERT_TRUE(w.session());
+  EXPECT_EQ(w.open_review(), nullptr) << "nothing to review before the answer";
+  QTest::qWait(1000);
+  for (int k = 0; k < 4; ++k) ASSERT_TRUE(w.next_maneuver());
+  const config::FetalPose pose = config::draw_pose(1);
+  ASSERT_TRUE(w.answer({pose.lie, pose.presentation, pose.back})) << w.message();
+  ASSERT_TRUE(w.figures().assessment);
+  EXPECT_EQ(w.figures().assessment->answer_score(), 3);
+  EXPECT_EQ(w.figures().assessment->maneuvers_reached(), 0);
+  app::trainer::ReviewWindow* r = w.open_review();
+  ASSERT_NE(r, nullptr) << w.message();
+  ASSERT_TRUE(r->take().scores);
+  EXPECT_EQ(r->take().scores->answer_score(), 3);
+  EXPECT_EQ(r->take().recording.devices.size(), 2u);
+  EXPECT_GT(r->take().duration_s, 0.5);
+  EXPECT_EQ(r->take().anatomy.tetrahedra, w.session()->mesh().tetrahedra);
+}
+
 // The displacement along -n of the patch at `patch` under a force f along -n, by `fetouch solve`.
 double static_depth(const fs::path& scene, const Eigen::Vector3d& patch, const Eigen::Vector3d& n, double f, const fs::path& out) {
   char press[300];
