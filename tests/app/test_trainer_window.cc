@@ -268,6 +268,9 @@ TEST_F(TrainerWindowTest, TheMouseDrivesEitherHandAndTheOtherHoldsWhereItWasLeft
   QTest::qWait(500);
   const Eigen::Vector3d left_cursor = w.cursor();
   const double left_force = force(0);
+  const auto left_hand = [&w] { return Eigen::Vector3d(w.session()->monitor().probes.front()[0].position); };
+  w.session()->monitor().probes.take();
+  const Eigen::Vector3d left_at = left_hand();
   EXPECT_LT(force(1), 1e-6) << "the right hand waits above the tissue";
   QTest::keyClick(&w, Qt::Key_Tab);
   ASSERT_EQ(w.session()->cursor_probe(), 1);
@@ -275,9 +278,19 @@ TEST_F(TrainerWindowTest, TheMouseDrivesEitherHandAndTheOtherHoldsWhereItWasLeft
   w.set_cursor(w.cursor() - 0.025 * w.shown().patch_normal[1]);
   ASSERT_TRUE(wait_until([&] { return force(1) > 0.2; }, 15000)) << "right hand: " << force(1) << " N";
   QTest::qWait(500);
-  std::printf("left hand %.3f N alone, %.3f N with the right one pressing %.3f N beside it\n", left_force, force(0), force(1));
-  EXPECT_GT(force(0), 0.5 * left_force) << "the left hand holds its press";
-  EXPECT_LT(force(0), 2.0 * left_force);
+  // A frame of two contacts' onset can pass the force watchdog's 0.25 s on a busy machine, which
+  // fades the forces out until the next frame: the left hand's force is looked for over 3 s.
+  wait_until([&] { return force(0) > 0.1; }, 3000);
+  w.session()->monitor().probes.take();
+  const double moved = (left_hand() - left_at).norm();
+  std::printf("left hand %.3f N alone, %.3f N (moved %.2f mm) with the right one pressing %.3f N beside it\n", left_force,
+              force(0), 1e3 * moved, force(1));
+  // The left hand holds its press: still in (the right's press pulls the surface under it down, so
+  // its force falls by as much as its share of the wall), and where it was: its spring (200 N/m)
+  // moves it half a millimetre for the 0.1 N it loses, 3 mm allowed for the tissue still settling
+  // (against the 25 mm each cursor went in).
+  EXPECT_GT(force(0), 0.1) << "the left hand still presses";
+  EXPECT_LT(moved, 3e-3) << "the left hand stays where it was left";
   QTest::keyClick(&w, Qt::Key_Tab);
   EXPECT_EQ(w.session()->cursor_probe(), 0);
   EXPECT_EQ(w.cursor(), left_cursor);
