@@ -223,6 +223,13 @@ ReviewWindow::ReviewWindow(ReviewTake take, const ReviewOptions& options) : take
   build_paths();
   set_paths_visible(options_.paths);
   view_->reset_camera();
+  if (take_.scores) {
+    // An exercise's phantom, seen as its coverage map beside it shows the abdomen: from the front
+    // (+z), the fundus (+x) up and the mother's right (+y) on the left.
+    camera()->SetViewUp(1, 0, 0);
+    camera()->OrthogonalizeViewUp();
+    renderer_->ResetCameraClippingRange();
+  }
 
   auto* side = new QWidget(this);
   auto* column = new QVBoxLayout(side);

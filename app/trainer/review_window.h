@@ -5,6 +5,9 @@
 // maneuvers and the comfort limit marked, and the exercise's scores with its coverage map when the
 // take is an exercise's (docs/trainer.md, "Reviewing a take").
 //
+// An exercise's take is seen from the front with the fundus up and the mother's right on the left,
+// as its coverage map is drawn; any other take from the trainer's default camera.
+//
 // A take is a folder: a recording (take.h5, app/recording.h) and the mesh it was made on
 // (anatomy.vtu, or STEM.anatomy.vtu beside STEM.h5: view_export.h), which `fetouch trainer` writes
 // beside every take it records; the exercise's assessment.json and coverage.png beside them when there are.
