@@ -1,0 +1,51 @@
+// The trainer window's in-process tests' common ground (label gui, under Xvfb): one QApplication for
+// the process, the shipped scenes by name, and a fixture that skips without a display and gives
+// each test a scratch folder.
+#pragma once
+
+#include <gtest/gtest.h>
+#include <unistd.h>
+#include <QApplication>
+#include <QSurfaceFormat>
+#include <QVTKOpenGLNativeWidget.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <optional>
+#include <string>
+
+#include "app/scene_mesh.h"
+
+namespace fetouch::testing {
+
+inline QApplication& application() {
+  static int argc = 1;
+  static char name[] = "trainer_window_tests";
+  static char* argv[] = {name, nullptr};
+  // Never destroyed: the process ends without tearing Qt down after MPI has finalised.
+  static QApplication* app = nullptr;
+  if (!app) {
+    QSurfaceFormat::setDefaultFormat(QVTKOpenGLNativeWidget::defaultFormat());
+    app = new QApplication(argc, argv);
+  }
+  return *app;
+}
+
+inline config::Scene scene(const std::string& file) {
+  std::optional<config::Scene> s = app::load_scene_or_report((std::filesystem::path(FETOUCH_SOURCE_DIR) / "config" / "scenes" / file).string());
+  EXPECT_TRUE(s);
+  return *s;
+}
+
+class TrainerWindowTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    if (!std::getenv("DISPLAY")) GTEST_SKIP() << "no display: run under xvfb-run -a";
+    application();
+    out_ = std::filesystem::temp_directory_path() / ("fetouch_trainer_window_" + std::to_string(::getpid()));
+    std::filesystem::remove_all(out_);
+  }
+  std::filesystem::path out_;
+};
+
+}  // namespace fetouch::testing
