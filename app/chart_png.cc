@@ -28,6 +28,11 @@ bool display_available() {
   return display && *display;
 }
 
+bool window_display_available() {
+  const char* wayland = std::getenv("WAYLAND_DISPLAY");
+  return display_available() || (wayland && *wayland);
+}
+
 std::string no_display_hint(const std::filesystem::path& png) {
   return "no X display, so " + png.string() +
          " was not drawn (VTK draws only with a display, even offscreen); run the command under "

@@ -30,6 +30,8 @@ struct Chart {
 
 // An X display to draw on ($DISPLAY set and not empty).
 bool display_available();
+// A display a window can open on (the trainer's and the review's Qt windows): X, or Wayland.
+bool window_display_available();
 
 // The sentence to print when it is not.
 std::string no_display_hint(const std::filesystem::path& png);

@@ -11,6 +11,7 @@
 #include <iostream>
 #include <memory>
 
+#include "app/chart_png.h"
 #include "app/cli.h"
 #include "app/commands/commands.h"
 #include "app/exit_codes.h"
@@ -39,9 +40,7 @@ int run_review(const ReviewCommandOptions& o) {
     std::fprintf(stderr, "error: --at %g: the take lasts %.3f s\n", o.at_s, take.duration_s);
     return kExitBadInput;
   }
-  const char* display = std::getenv("DISPLAY");
-  const char* wayland = std::getenv("WAYLAND_DISPLAY");
-  if ((!display || !*display) && (!wayland || !*wayland)) {
+  if (!window_display_available()) {
     std::cerr << "error: fetouch review opens a window and there is no display (DISPLAY is not set); "
                  "on a machine without one run it under a virtual display: xvfb-run -a fetouch review ... --screenshot FILE.png\n";
     return kExitBadInput;

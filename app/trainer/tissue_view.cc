@@ -31,6 +31,8 @@ namespace fetouch::app::trainer {
 
 namespace {
 
+constexpr std::array<double, 3> kSkin{0.93, 0.76, 0.68};  // the wall, when regions are coloured
+
 vtkSmartPointer<vtkActor> sphere_actor(double radius, double r, double g, double b) {
   auto source = vtkSmartPointer<vtkSphereSource>::New();
   source->SetRadius(radius);
@@ -257,7 +259,7 @@ void TissueView::update_tissue(const TissueSnapshot& s, ColourField field) {
   std::vector<vtkPolyDataMapper*> mappers{surface_mapper_.Get()};
   for (RegionLayer& layer : layers_) mappers.push_back(layer.mapper.Get());
   if (regions) {
-    surface_actor_->GetProperty()->SetColor(0.93, 0.76, 0.68);
+    surface_actor_->GetProperty()->SetColor(kSkin[0], kSkin[1], kSkin[2]);
     for (std::size_t i = 0; i < layers_.size(); ++i) {
       const std::array<double, 3> c = region_colour(i);
       layers_[i].actor->GetProperty()->SetColor(c[0], c[1], c[2]);
@@ -332,7 +334,7 @@ std::array<double, 3> TissueView::region_colour(std::size_t i) const {
   // The wall skin-toned; then bone, flesh, and distinct hues for any further regions.
   static constexpr std::array<std::array<double, 3>, 6> kPalette{
       {{0.95, 0.90, 0.72}, {0.86, 0.50, 0.46}, {0.45, 0.70, 0.92}, {0.62, 0.84, 0.50}, {0.80, 0.62, 0.90}, {0.95, 0.70, 0.30}}};
-  if (i < layers_.size() && layers_[i].name == "wall") return {0.93, 0.76, 0.68};
+  if (i < layers_.size() && layers_[i].name == "wall") return kSkin;
   std::size_t k = 0;
   for (std::size_t j = 0; j < i && j < layers_.size(); ++j) k += layers_[j].name != "wall";
   return kPalette[k % kPalette.size()];

@@ -10,6 +10,7 @@
 #include <memory>
 #include <sstream>
 
+#include "app/chart_png.h"
 #include "app/cli.h"
 #include "app/commands/commands.h"
 #include "app/exit_codes.h"
@@ -87,9 +88,7 @@ bool set_up_exercise(const TrainerCommandOptions& o, config::Scene& scene, train
 }
 
 int run_trainer(const TrainerCommandOptions& o) {
-  const char* display = std::getenv("DISPLAY");
-  const char* wayland = std::getenv("WAYLAND_DISPLAY");
-  if ((!display || !*display) && (!wayland || !*wayland)) {
+  if (!window_display_available()) {
     std::cerr << "error: fetouch trainer opens a window and there is no display (DISPLAY is not set); "
                  "on a machine without one run it under a virtual display: xvfb-run -a fetouch trainer ...\n";
     return kExitBadInput;

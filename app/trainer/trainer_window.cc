@@ -34,6 +34,12 @@ namespace {
 constexpr int kImageSize = 256;
 constexpr double kImageWidthM = 0.12, kImageDepthM = 0.10;
 
+// The ultrasound image's plane: through `at`, looking along -normal, lateral along x or y.
+SlicePlane image_plane(const Eigen::Vector3d& at, const Eigen::Vector3d& normal, bool lateral_x) {
+  return probe_plane(at, normal, lateral_x ? Eigen::Vector3d::UnitX() : Eigen::Vector3d::UnitY(), kImageWidthM, kImageDepthM,
+                     kImageSize, kImageSize);
+}
+
 double seconds_since(std::chrono::steady_clock::time_point t) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
 }
@@ -323,8 +329,7 @@ void TrainerWindow::tick() {
     const SessionMonitor::ProbeTick& t = monitor.probes.front()[probe];
     const Eigen::Vector3d at = t.in_contact ? t.proxy : shown_.patch_centre[probe];
     if (shown_.frame != imaged_frame_ || (at - imaged_at_).norm() > 5e-5) {
-      plane_ = probe_plane(at, shown_.patch_normal[probe], lateral_x_ ? Eigen::Vector3d::UnitX() : Eigen::Vector3d::UnitY(),
-                           kImageWidthM, kImageDepthM, kImageSize, kImageSize);
+      plane_ = image_plane(at, shown_.patch_normal[probe], lateral_x_);
       imager_->request(shown_.frame, shown_.displacement, plane_);
       ++figures_.ultrasound_asked;
       imaged_frame_ = shown_.frame, imaged_at_ = at;
@@ -367,8 +372,7 @@ void TrainerWindow::tick() {
 void TrainerWindow::image_now() {
   if (!session_ || !imager_ || shown_.patch_centre.empty()) return;
   const int probe = std::max(0, session_->cursor_probe());
-  plane_ = probe_plane(shown_.patch_centre[probe], shown_.patch_normal[probe], lateral_x_ ? Eigen::Vector3d::UnitX() : Eigen::Vector3d::UnitY(),
-                       kImageWidthM, kImageDepthM, kImageSize, kImageSize);
+  plane_ = image_plane(shown_.patch_centre[probe], shown_.patch_normal[probe], lateral_x_);
   imager_->make_now(shown_.frame, shown_.displacement, plane_, image_);
   imaged_frame_ = shown_.frame, imaged_at_ = shown_.patch_centre[probe];
   // The image's label may just have been shown: laid out first, so that the picture fits it.
