@@ -1,6 +1,11 @@
 #include "app/realtime_cores.h"
 
 #include <pthread.h>
+#include <sys/resource.h>
+#include <sys/syscall.h>
+#include <unistd.h>
+
+#include <cerrno>
 
 #include "app/session.h"
 
@@ -56,6 +61,18 @@ int realtime_solver_cores(const SessionSettings& settings) {
   cpu_set_t allowed;
   CPU_ZERO(&allowed);
   return allowed_cores(allowed) ? CPU_COUNT(&allowed) : 1;
+}
+
+int thread_nice() {
+  errno = 0;
+  const int nice = getpriority(PRIO_PROCESS, static_cast<id_t>(syscall(SYS_gettid)));  // -1 is valid: errno tells
+  return errno == 0 ? nice : 0;
+}
+
+int raise_solver_priority() {
+  if (thread_nice() > kSolverNice)  // refused without the right: the thread keeps its nice
+    setpriority(PRIO_PROCESS, static_cast<id_t>(syscall(SYS_gettid)), kSolverNice);
+  return thread_nice();
 }
 
 void share_haptic_core() {

@@ -399,8 +399,13 @@ SessionSummary run_realtime(haptics::Environment& environment, std::vector<std::
     haptic_done = true;
   });
 
+  std::atomic<int> solver_nice{0};
   std::thread solver([&] {
     cores.pin_other();
+    // Before the solves: the threads they start (assembly, the background factoriser's nice is set
+    // from it) follow it.
+    solver_nice = settings.realtime_priority ? raise_solver_priority() : thread_nice();
+    if (monitor) monitor->solver_nice.store(solver_nice.load(), std::memory_order_relaxed);
     try {
       for (;;) {
         if (!requests.take()) {
@@ -490,6 +495,7 @@ SessionSummary run_realtime(haptics::Environment& environment, std::vector<std::
   t.skipped_frames = skipped;
   t.dropped_samples = dropped;
   t.realtime_priority = priority_granted;
+  t.solver_nice = solver_nice;
   t.haptic_core = haptic_core;
   return summary;
 }

@@ -40,6 +40,7 @@ namespace fetouch::app {
 struct SessionMonitor {
   static constexpr int kMaxDevices = 16;
   std::atomic<long> ticks{0}, late_ticks{0};  // late ticks as TimingSummary::tick_overruns counts them
+  std::atomic<int> solver_nice{0};  // TimingSummary::solver_nice, once the solver thread has set it
   std::atomic<double> force_n[kMaxDevices] = {};  // the force each device was last sent (magnitude)
   // Each device's last tick, published every tick through a lock-free triple buffer (one reader).
   struct ProbeTick {
@@ -65,8 +66,9 @@ struct SessionSettings {
   std::function<void(const FrameRecord&)> after_frame;
   bool keep_forces = false;                 // the summary keeps every force sent (studies)
   bool progress = false;                    // lockstep: frames done and the expected end on stderr
-  // Real time: ask for SCHED_FIFO for the haptic thread (granted to root or with CAP_SYS_NICE;
-  // without it the thread runs at normal priority, and the summary says so).
+  // Real time: ask for SCHED_FIFO for the haptic thread and nice kSolverNice for the solver's
+  // (app/realtime_cores.h; granted to root or with CAP_SYS_NICE; without it the threads run at
+  // normal priority, and the summary says so).
   bool realtime_priority = true;
   // Real time on a machine with 2 or more cores: the haptic thread on the last core alone, the
   // solver and I/O threads (and the threads they start) on the others.
@@ -98,6 +100,7 @@ struct TimingSummary {
   long skipped_frames = 0;    // frames whose samples a newer frame replaced before the solver took them
   long dropped_samples = 0;   // ticks the recording ring had no room for (lost from the recording)
   bool realtime_priority = false;
+  int solver_nice = 0;   // the solver thread's nice value (kSolverNice, -10, where it could be raised)
   int haptic_core = -1;  // the core the haptic thread had to itself (-1: not pinned)
 };
 

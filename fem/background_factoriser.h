@@ -31,7 +31,8 @@ struct TangentSystem::Worker {
   cpu_set_t affinity{};  // the requesting thread's cores: the worker runs where the solver may
   bool pinned = false;
   // Real time (frames taken up when ready): the worker yields the core it shares with the solver
-  // to the frames, which have a deadline, and factorises in the time they leave (nice 19).
+  // to the frames, which have a deadline, and factorises in the time they leave (19 nice levels
+  // below the solver thread, at most 19: background_nice in tangent_system_cholmod.cc).
   int nice = 0, applied_nice = 0;
   std::thread thread;
 

@@ -224,6 +224,7 @@ void write_summary(std::ostream& out, const ReplayOptions& o, const config::Scen
     json.key("skipped_frames").value(t.skipped_frames);
     json.key("dropped_samples").value(t.dropped_samples);
     json.key("realtime_priority").value(t.realtime_priority);
+    json.key("solver_nice").value(static_cast<long>(t.solver_nice));
     json.key("haptic_core").value(static_cast<long>(t.haptic_core));
   }
   json.key("newton_failures").value(s.newton_failures);
@@ -408,9 +409,10 @@ int run_replay(const ReplayOptions& o) {
     if (o.clock == "realtime") {
       const TimingSummary& t = summary.timing;
       const std::string core = t.haptic_core >= 0 ? ", haptic thread alone on core " + std::to_string(t.haptic_core) : "";
-      std::printf("  real time%s%s: tick period p50 %.3f ms, p99 %.3f ms, max %.3f ms; lateness p99 %.1f us, max %.1f us; "
+      const std::string solver = ", solver at nice " + std::to_string(t.solver_nice);
+      std::printf("  real time%s%s%s: tick period p50 %.3f ms, p99 %.3f ms, max %.3f ms; lateness p99 %.1f us, max %.1f us; "
                   "%ld late ticks; %ld frame overruns, %ld frames skipped, %ld solved unlike lockstep\n",
-                  t.realtime_priority ? " (SCHED_FIFO)" : " (normal priority)", core.c_str(), 1e3 * t.period_p50_s,
+                  t.realtime_priority ? " (SCHED_FIFO)" : " (normal priority)", core.c_str(), solver.c_str(), 1e3 * t.period_p50_s,
                   1e3 * t.period_p99_s, 1e3 * t.period_max_s, 1e6 * t.lateness_p99_s, 1e6 * t.lateness_max_s,
                   t.tick_overruns, t.frame_overruns, t.skipped_frames, t.solver_differences);
     }

@@ -3,12 +3,18 @@
 // haptics::LockstepSession renders for the same device points (the runtime adds no timing of its
 // own); two runs record the same forces; the summary agrees with the recording.
 #include <gtest/gtest.h>
+#include <sys/resource.h>
+#include <sys/syscall.h>
+#include <unistd.h>
 
+#include <atomic>
 #include <cmath>
+#include <thread>
 #include <cstring>
 #include <iostream>
 #include <filesystem>
 
+#include "app/realtime_cores.h"
 #include "app/session.h"
 #include "haptics/linear_surface_environment.h"
 
@@ -175,6 +181,60 @@ TEST(RealtimeSession, ForcesEqualLockstepUpToTheFirstLateAnswer) {
   EXPECT_GT(summary.timing.period_p50_s, 0);
   EXPECT_GE(summary.timing.period_max_s, summary.timing.period_p99_s);
   EXPECT_GE(summary.timing.lateness_max_s, 0);
+}
+
+// The solver's thread in real time: at nice kSolverNice (-10) where the process may raise a
+// thread's priority, so that other programs cannot take its core; at the nice it started with where
+// it may not. What the solves' own thread had is recorded by the environment itself and compared
+// with the summary; whether raising is allowed here is found by trying it on a thread of the test's.
+class NiceRecordingEnvironment final : public haptics::Environment {
+ public:
+  explicit NiceRecordingEnvironment(haptics::Environment& inner) : inner_(inner) {}
+  int contacts() const override { return inner_.contacts(); }
+  void initial(haptics::EnvironmentUpdate& out) override { inner_.initial(out); }
+  void solve(const std::vector<haptics::ContactSample>& samples, long frame, haptics::EnvironmentUpdate& out) override {
+    errno = 0;
+    const int nice = getpriority(PRIO_PROCESS, static_cast<id_t>(syscall(SYS_gettid)));
+    if (errno == 0) nice_ = nice;
+    inner_.solve(samples, frame, out);
+  }
+  std::atomic<int> nice_{1000};
+
+ private:
+  haptics::Environment& inner_;
+};
+
+TEST(RealtimeSession, TheSolverThreadRunsAheadOfOtherProgramsWhereItMay) {
+  int started = 0, raised = 0;
+  std::thread probe([&] {
+    const auto tid = static_cast<id_t>(syscall(SYS_gettid));
+    started = getpriority(PRIO_PROCESS, tid);
+    setpriority(PRIO_PROCESS, tid, kSolverNice);
+    raised = getpriority(PRIO_PROCESS, tid);
+  });
+  probe.join();
+  const int expected = raised == kSolverNice ? kSolverNice : started;
+  std::printf("[ note ] a thread here %s raise its nice to %d\n", raised == kSolverNice ? "may" : "may not", kSolverNice);
+
+  auto inner = two_contacts();
+  NiceRecordingEnvironment environment(inner);
+  auto devices = replays();
+  SessionSettings s = settings(fs::path());
+  s.recording.reset();
+  SessionMonitor monitor;
+  s.monitor = &monitor;
+  const SessionSummary summary = run_realtime(environment, devices, s);
+  EXPECT_GT(summary.frames, 10);
+  EXPECT_EQ(environment.nice_.load(), expected);
+  EXPECT_EQ(summary.timing.solver_nice, expected);
+  EXPECT_EQ(monitor.solver_nice.load(), expected);
+  // Asked not to raise priorities, the solver keeps the nice it started with.
+  auto devices2 = replays();
+  s.realtime_priority = false;
+  NiceRecordingEnvironment plain(inner);
+  const SessionSummary unraised = run_realtime(plain, devices2, s);
+  EXPECT_EQ(plain.nice_.load(), started);
+  EXPECT_EQ(unraised.timing.solver_nice, started);
 }
 
 }  // namespace
