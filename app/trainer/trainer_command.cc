@@ -163,6 +163,9 @@ int run_trainer(const TrainerCommandOptions& o) {
     json.key("ultrasound_image_ms").value(image_ms);
     json.key("ultrasound_images_per_s").value(f.ultrasound_per_s);
     json.key("renders").value(f.renders);
+    json.key("solver_nice").value(static_cast<long>(s.timing.solver_nice));
+    json.key("others_cores_max").value(f.others_cores_max);
+    json.key("busy_s").value(f.busy_s);
     json.key("wall_s").value(f.wall_s);
     json.key("screenshot").value(o.screenshot);
     if (f.assessment) {
@@ -209,6 +212,9 @@ int run_trainer(const TrainerCommandOptions& o) {
                 s.timing.tick_overruns, s.timing.frame_overruns, s.timing.skipped_frames);
     std::printf("  ultrasound: %ld images of 256 x 256 shown of %ld asked for, %.1f per second, %.1f ms each to make; "
                 "%ld renders\n", f.ultrasound_images, f.ultrasound_asked, f.ultrasound_per_s, image_ms, f.renders);
+    if (f.busy_s > 0)
+      std::printf("  the machine was busy for %.0f s (other programs used up to %.1f cores); the solver ran at nice %d\n",
+                  f.busy_s, f.others_cores_max, s.timing.solver_nice);
     if (!o.screenshot.empty())
       std::printf("  wrote %s, %s (the ultrasound image) and %s (the tissue shown)\n", o.screenshot.c_str(),
                   f.ultrasound_png.c_str(), f.tissue_vtu.c_str());

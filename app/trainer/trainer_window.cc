@@ -170,6 +170,7 @@ TrainerWindow::TrainerWindow(const config::Scene& scene, const TrainerOptions& s
   connect(timer_, &QTimer::timeout, this, [this] { tick(); });
   timer_->start(30);
   started_ = rate_from_ = std::chrono::steady_clock::now();
+  cpu_ = sample_cpu();
 }
 
 bool TrainerWindow::set_region_visible(const std::string& name, bool on) {
@@ -229,7 +230,7 @@ void TrainerWindow::start_take(const std::optional<std::filesystem::path>& recor
   energy_plot_->set_series(static_cast<int>(radii.size()));
   energy_plot_->clear();
   energy_plot_->set_limit(0, "generated below");
-  last_frame_ = -2, frames_seen_ = 0, overruns_ = 0, imaged_frame_ = -3;
+  last_frame_ = -2, frames_seen_ = 0, rate_frames_ = 0, overruns_ = 0, imaged_frame_ = -3;
   session_->want_stress(field_ == ColourField::von_mises);
   if (session_->take_snapshot()) shown_ = session_->snapshot();
   // Each mouse probe's cursor 1 cm out from its patch; the mouse drives the first.
@@ -394,20 +395,38 @@ void TrainerWindow::update_status() {
   SessionMonitor& monitor = session_->monitor();
   if (span >= 1.0) {
     haptic_hz_ = (monitor.ticks.load() - rate_ticks_) / span;
-    solver_hz_ = (frames_seen_ - rate_frames_) / span;
+    // The solver's rate from the frames it answered (the window may show fewer when it is slower).
+    solver_hz_ = std::max(0.0, (last_frame_ - rate_frames_) / span);
     ultrasound_hz_ = (figures_.ultrasound_images - rate_images_) / span;
-    rate_ticks_ = monitor.ticks.load(), rate_frames_ = frames_seen_, rate_images_ = figures_.ultrasound_images;
+    view_hz_ = (figures_.renders - rate_renders_) / span;
+    const CpuSample cpu = sample_cpu();
+    others_cores_ = others_cores(cpu_, cpu);
+    cpu_ = cpu;
+    figures_.others_cores_max = std::max(figures_.others_cores_max, others_cores_);
+    if (others_cores_ >= kBusyCores) figures_.busy_s += span;
+    rate_ticks_ = monitor.ticks.load(), rate_frames_ = last_frame_, rate_images_ = figures_.ultrasound_images;
+    rate_renders_ = figures_.renders;
     rate_from_ = std::chrono::steady_clock::now();
   }
   const haptics::HapticLoopSettings& loop = session_->loop();
   std::ostringstream s;
   s.setf(std::ios::fixed);
   s.precision(2);
-  s << (session_->paused() ? "PAUSED  " : session_->running() ? "" : "ENDED  ") << "t " << monitor.ticks.load() * loop.period_s
+  s << (session_->paused() ? "PAUSED  " : session_->running() ? "" : "ENDED  ");
+  // Another program's load slows the view and the ultrasound (they share the cores with it), not
+  // the solver, whose thread is ahead of them all where it may be (TimingSummary::solver_nice).
+  if (others_cores_ >= kBusyCores) {
+    s.precision(1);
+    s << "BUSY (other programs use " << others_cores_ << " of " << cpu_.cpus << " cores): view " << std::lround(view_hz_)
+      << " Hz, " << (monitor.solver_nice.load() < 0 ? "the solver first   " : "the solver slowed too   ");
+    s.precision(2);
+  }
+  s << "t " << monitor.ticks.load() * loop.period_s
     << " s   haptic " << std::lround(haptic_hz_) << " Hz   solver " << std::lround(solver_hz_) << " Hz   "
     << haptics::to_string(model_) << " / " << haptics::to_string(hold_) << "   Kp " << std::lround(shown_.proportional_gain)
     << " Ki " << std::lround(shown_.integral_gain) << "   margin " << shown_.stability_margin << "   late ticks "
     << monitor.late_ticks.load() << "   overruns " << overruns_ << "   ultrasound " << std::lround(ultrasound_hz_) << " img/s";
+
   // What the hand feels: the passivity layer when it scales a probe's force, and the identified
   // stiffness against the frame's (docs/stability.md, sections 9 and 10).
   const std::vector<std::string>& names = session_->probe_names();

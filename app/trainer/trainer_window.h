@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "app/exercise/leopold.h"
+#include "app/machine_load.h"
 #include "app/trainer/deformed_slice.h"
 #include "app/trainer/tissue_view.h"
 #include "app/trainer/trainer_session.h"
@@ -57,6 +58,10 @@ struct WindowOptions {
   ExerciseOptions exercise;
 };
 
+// Other programs keeping this much of the machine busy (cores) make the status line say so: the
+// window and the ultrasound then slow down, the solver does not (app/realtime_cores.h).
+inline constexpr double kBusyCores = 0.5;
+
 // What the window measured, for the command's summary.
 struct WindowFigures {
   long ultrasound_asked = 0;      // images asked for (a new frame, or the probe moved)
@@ -65,6 +70,10 @@ struct WindowFigures {
   double ultrasound_per_s = 0;    // shown per second of the last take, from its start to its end
   double wall_s = 0;
   long renders = 0;
+  // Other programs' use of the CPU, measured each second (app/machine_load.h): the most, in cores,
+  // and the seconds in which it reached kBusyCores (the status line then says so).
+  double others_cores_max = 0;
+  double busy_s = 0;
   std::string error;
   // Beside --screenshot OUT.png: OUT.ultrasound.png, the ultrasound image of the tissue shown at the
   // end (`frame`), in `plane`, the volume scaled by `gain` (none: the cross-section), and OUT.vtu,
@@ -184,7 +193,9 @@ class TrainerWindow : public QMainWindow {
   int takes_ = 0, screenshots_ = 0;
   long last_frame_ = -2, frames_seen_ = 0, overruns_ = 0, imaged_frame_ = -3;
   Eigen::Vector3d imaged_at_ = Eigen::Vector3d::Zero();  // where the shown image's plane went through
-  double haptic_hz_ = 0, solver_hz_ = 0, ultrasound_hz_ = 0;
+  double haptic_hz_ = 0, solver_hz_ = 0, ultrasound_hz_ = 0, view_hz_ = 0, others_cores_ = 0;
+  CpuSample cpu_;
+  long rate_renders_ = 0;
   std::chrono::steady_clock::time_point started_, rate_from_, take_started_;
   long rate_ticks_ = 0, rate_frames_ = 0, rate_images_ = 0, take_images_ = 0;
   WindowFigures figures_;

@@ -1,8 +1,10 @@
 // `fetouch trainer`, the real binary in a real window under Xvfb (label gui): every shipped scene
 // opens, runs 3 s with its scripted devices and closes with exit 0 and a screenshot; the 3D view's
-// probe region changes between rest and mid-press; without a display the command says to use
-// xvfb-run and exits 2.
+// probe region changes between rest and mid-press; another program's load is measured and said;
+// without a display the command says to use xvfb-run and exits 2.
 #include <gtest/gtest.h>
+#include <signal.h>
+#include <sys/wait.h>
 #include <unistd.h>
 #include <vtkDataArray.h>
 #include <vtkImageData.h>
@@ -10,8 +12,10 @@
 #include <vtkPNGReader.h>
 #include <vtkPointData.h>
 
+#include <cmath>
 #include <cstdlib>
 #include <filesystem>
+#include <regex>
 
 #include "tests/support/run_command.h"
 
@@ -106,6 +110,32 @@ TEST(TrainerCommand, TheProbesRegionChangesBetweenRestAndMidPress) {
   EXPECT_LT(corner, 1.0) << "the background should not change";
   // And the ultrasound image (right column, top) shows the press too.
   EXPECT_GT(difference(a, b, 0.70, 0.98, 0.08, 0.55), 1.0);
+}
+
+// A number of the --json summary (NaN when absent).
+double json_number(const std::string& json, const std::string& key) {
+  std::smatch m;
+  return std::regex_search(json, m, std::regex("\"" + key + "\":(-?[0-9.eE+-]+)")) ? std::stod(m[1]) : std::nan("");
+}
+
+// Another program keeping a core busy for the whole take: the window measures it and says the
+// machine is busy (the summary counts the seconds it said so); nothing fails or is skipped for it.
+TEST(TrainerCommand, SaysTheMachineIsBusyWhileAnotherProgramKeepsACore) {
+  ASSERT_TRUE(std::getenv("DISPLAY")) << "run under xvfb-run -a";
+  const pid_t hog = fork();
+  ASSERT_GE(hog, 0);
+  if (hog == 0) {
+    volatile double x = 0;
+    for (;;) x = x + 1;
+  }
+  const std::string scene = (fs::path(FETOUCH_SOURCE_DIR) / "config" / "scenes" / "fetus_simple.yaml").string();
+  const auto r = run_command(fetouch("trainer " + scene + " --duration 3 --json --out " + scratch("busy").string()));
+  kill(hog, SIGKILL);
+  waitpid(hog, nullptr, 0);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_GE(json_number(r.out, "others_cores_max"), 0.5) << r.out;
+  EXPECT_GE(json_number(r.out, "busy_s"), 1.0) << r.out;
+  EXPECT_EQ(json_number(r.out, "ticks"), 3000) << r.out;
 }
 
 TEST(TrainerCommand, WithoutADisplayItSaysToUseXvfbAndExits2) {
