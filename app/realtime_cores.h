@@ -22,9 +22,10 @@ bool allowed_cores(cpu_set_t& allowed);
 
 // The nice value a real-time session's solver thread asks for. The haptic thread has its core, but
 // the solver shares the others with whatever else the machine runs: at the default nice 0 one busy
-// program took half of the solver's core and the trainer skipped 4-9 frames in 10 s (solve p99 113-137
-// ms); at -10 (CFS weight 9,548 against 1,024) the same load left it 0 skipped, p99 49-55 ms
-// (docs/trainer.md, "When the machine is busy"). Threads the solver starts inherit it.
+// program took half of the solver's core, and the trainer skipped 4-6 frames in a 30 s take (solve
+// p99 68-70 ms; 12-16 and 108-119 ms with two); at -10 (CFS weight 9,548 against 1,024) the same
+// loads left it 0 skipped, p99 38-46 ms (docs/trainer.md, "When the machine is busy"). Threads the
+// solver starts inherit it.
 inline constexpr int kSolverNice = -10;
 
 // Raises the calling thread's priority to kSolverNice where the process may (root, CAP_SYS_NICE or

@@ -402,8 +402,8 @@ SessionSummary run_realtime(haptics::Environment& environment, std::vector<std::
   std::atomic<int> solver_nice{0};
   std::thread solver([&] {
     cores.pin_other();
-    // Before the solves: the threads they start (assembly, the background factoriser's nice is set
-    // from it) follow it.
+    // Before the solves, so that the threads a frame starts inherit it and the background
+    // factoriser's nice follows it (app/realtime_cores.h).
     solver_nice = settings.realtime_priority ? raise_solver_priority() : thread_nice();
     if (monitor) monitor->solver_nice.store(solver_nice.load(), std::memory_order_relaxed);
     try {

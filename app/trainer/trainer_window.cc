@@ -230,7 +230,7 @@ void TrainerWindow::start_take(const std::optional<std::filesystem::path>& recor
   energy_plot_->set_series(static_cast<int>(radii.size()));
   energy_plot_->clear();
   energy_plot_->set_limit(0, "generated below");
-  last_frame_ = -2, frames_seen_ = 0, rate_frames_ = 0, overruns_ = 0, imaged_frame_ = -3;
+  last_frame_ = -2, rate_frames_ = 0, overruns_ = 0, imaged_frame_ = -3;
   session_->want_stress(field_ == ColourField::von_mises);
   if (session_->take_snapshot()) shown_ = session_->snapshot();
   // Each mouse probe's cursor 1 cm out from its patch; the mouse drives the first.
@@ -302,7 +302,6 @@ void TrainerWindow::tick() {
     shown_ = session_->snapshot();
     view_->update_tissue(shown_, field_);
     if (shown_.frame != last_frame_) {
-      ++frames_seen_;
       if (shown_.solve_s > session_->solver_period_s()) ++overruns_;
       frame_plot_->add(0, shown_.time_s, 1e3 * shown_.solve_s);
       margin_plot_->add(0, shown_.time_s, shown_.stability_margin);
@@ -426,7 +425,6 @@ void TrainerWindow::update_status() {
     << haptics::to_string(model_) << " / " << haptics::to_string(hold_) << "   Kp " << std::lround(shown_.proportional_gain)
     << " Ki " << std::lround(shown_.integral_gain) << "   margin " << shown_.stability_margin << "   late ticks "
     << monitor.late_ticks.load() << "   overruns " << overruns_ << "   ultrasound " << std::lround(ultrasound_hz_) << " img/s";
-
   // What the hand feels: the passivity layer when it scales a probe's force, and the identified
   // stiffness against the frame's (docs/stability.md, sections 9 and 10).
   const std::vector<std::string>& names = session_->probe_names();

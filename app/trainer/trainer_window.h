@@ -191,7 +191,7 @@ class TrainerWindow : public QMainWindow {
   SlicePlane plane_;       // the newest asked for
   std::optional<std::filesystem::path> recording_;
   int takes_ = 0, screenshots_ = 0;
-  long last_frame_ = -2, frames_seen_ = 0, overruns_ = 0, imaged_frame_ = -3;
+  long last_frame_ = -2, overruns_ = 0, imaged_frame_ = -3;
   Eigen::Vector3d imaged_at_ = Eigen::Vector3d::Zero();  // where the shown image's plane went through
   double haptic_hz_ = 0, solver_hz_ = 0, ultrasound_hz_ = 0, view_hz_ = 0, others_cores_ = 0;
   CpuSample cpu_;
