@@ -69,9 +69,9 @@ int thread_nice() {
   return errno == 0 ? nice : 0;
 }
 
-int raise_solver_priority() {
-  if (thread_nice() > kSolverNice)  // refused without the right: the thread keeps its nice
-    setpriority(PRIO_PROCESS, static_cast<id_t>(syscall(SYS_gettid)), kSolverNice);
+int raise_thread_priority(int nice) {
+  if (thread_nice() > nice)  // refused without the right: the thread keeps its nice
+    setpriority(PRIO_PROCESS, static_cast<id_t>(syscall(SYS_gettid)), nice);
   return thread_nice();
 }
 

@@ -28,9 +28,18 @@ bool allowed_cores(cpu_set_t& allowed);
 // solver starts inherit it.
 inline constexpr int kSolverNice = -10;
 
-// Raises the calling thread's priority to kSolverNice where the process may (root, CAP_SYS_NICE or
-// RLIMIT_NICE; never lowers it) and returns the nice value the thread has afterwards.
-int raise_solver_priority();
+// The nice value the trainer's window thread asks for (app/trainer/trainer_command.cc). The window
+// shares the haptic thread's core, never the solver's, so it cannot slow the solver; against other
+// programs it keeps the view moving. Under two busy loops the view rendered 7 times a second at 0,
+// 10-12.5 at -5 (the ultrasound 6.5-6.8 and 9.5-11.9 images/s); at -10 it rendered 14 a second but
+// starved its own imager (nice +5): 9-10 images/s.
+inline constexpr int kWindowNice = -5;
+
+// Raises the calling thread's priority to `nice` where the process may (root, CAP_SYS_NICE or
+// RLIMIT_NICE; never lowers it) and returns the nice value the thread has afterwards. Threads it
+// starts later inherit it.
+int raise_thread_priority(int nice);
+inline int raise_solver_priority() { return raise_thread_priority(kSolverNice); }
 // The calling thread's nice value (0 where it cannot be read).
 int thread_nice();
 

@@ -17,6 +17,7 @@
 #include "app/json_writer.h"
 #include "app/log.h"
 #include "app/mpi_session.h"
+#include "app/realtime_cores.h"
 #include "app/scene_mesh.h"
 #include "app/session.h"
 #include "app/trainer/trainer_window.h"
@@ -107,8 +108,10 @@ int run_trainer(const TrainerCommandOptions& o) {
   if (!set_up_exercise(o, *loaded, exercise)) return kExitBadInput;
   ensure_mpi();
   // The window, and the threads of a software OpenGL renderer, share the haptic thread's core
-  // (which it preempts at every tick) and leave the solver its own.
+  // (which it preempts at every tick) and leave the solver its own; ahead of other programs there
+  // (kWindowNice), below the solver's thread on its core (kSolverNice).
   share_haptic_core();
+  const int window_nice = raise_thread_priority(kWindowNice);
   QSurfaceFormat::setDefaultFormat(QVTKOpenGLNativeWidget::defaultFormat());
   static int argc = 1;
   static char name[] = "fetouch";
@@ -164,6 +167,7 @@ int run_trainer(const TrainerCommandOptions& o) {
     json.key("ultrasound_images_per_s").value(f.ultrasound_per_s);
     json.key("renders").value(f.renders);
     json.key("solver_nice").value(static_cast<long>(s.timing.solver_nice));
+    json.key("window_nice").value(static_cast<long>(window_nice));
     json.key("others_cores_max").value(f.others_cores_max);
     json.key("busy_s").value(f.busy_s);
     json.key("wall_s").value(f.wall_s);
@@ -213,8 +217,8 @@ int run_trainer(const TrainerCommandOptions& o) {
     std::printf("  ultrasound: %ld images of 256 x 256 shown of %ld asked for, %.1f per second, %.1f ms each to make; "
                 "%ld renders\n", f.ultrasound_images, f.ultrasound_asked, f.ultrasound_per_s, image_ms, f.renders);
     if (f.busy_s > 0)
-      std::printf("  the machine was busy for %.0f s (other programs used up to %.1f cores); the solver ran at nice %d\n",
-                  f.busy_s, f.others_cores_max, s.timing.solver_nice);
+      std::printf("  the machine was busy for %.0f s (other programs used up to %.1f cores); the solver ran at nice %d, "
+                  "the window at %d\n", f.busy_s, f.others_cores_max, s.timing.solver_nice, window_nice);
     if (!o.screenshot.empty())
       std::printf("  wrote %s, %s (the ultrasound image) and %s (the tissue shown)\n", o.screenshot.c_str(),
                   f.ultrasound_png.c_str(), f.tissue_vtu.c_str());
