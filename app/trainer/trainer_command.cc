@@ -108,8 +108,8 @@ int run_trainer(const TrainerCommandOptions& o) {
   if (!set_up_exercise(o, *loaded, exercise)) return kExitBadInput;
   ensure_mpi();
   // The window, and the threads of a software OpenGL renderer, share the haptic thread's core
-  // (which it preempts at every tick) and leave the solver its own; ahead of other programs there
-  // (kWindowNice), below the solver's thread on its core (kSolverNice).
+  // (which it preempts at every tick) and leave the solver its own; there the window runs ahead of
+  // other programs (kWindowNice), as the solver does on its core (kSolverNice).
   share_haptic_core();
   const int window_nice = raise_thread_priority(kWindowNice);
   QSurfaceFormat::setDefaultFormat(QVTKOpenGLNativeWidget::defaultFormat());
