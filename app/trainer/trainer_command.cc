@@ -166,6 +166,8 @@ int run_trainer(const TrainerCommandOptions& o) {
     json.key("ultrasound_image_ms").value(image_ms);
     json.key("ultrasound_images_per_s").value(f.ultrasound_per_s);
     json.key("renders").value(f.renders);
+    json.key("renders_per_s").value(f.renders_per_s);
+    json.key("render_ms").value(f.renders > 0 ? 1e3 * f.render_seconds / f.renders : 0.0);
     json.key("solver_nice").value(static_cast<long>(s.timing.solver_nice));
     json.key("window_nice").value(static_cast<long>(window_nice));
     json.key("others_cores_max").value(f.others_cores_max);

@@ -6,7 +6,7 @@
 #include <QKeyEvent>
 #include <QLabel>
 #include <QMouseEvent>
-#include <QVTKOpenGLNativeWidget.h>
+#include <QVTKOpenGLStereoWidget.h>
 #include <QWheelEvent>
 #include <vtkCamera.h>
 #include <vtkGenericOpenGLRenderWindow.h>

@@ -7,13 +7,14 @@
 #include <QHBoxLayout>
 #include <QImage>
 #include <QLabel>
+#include <QPainter>
 #include <QPixmap>
 #include <QSplitter>
 #include <QStatusBar>
 #include <QTimer>
 #include <QToolBar>
 #include <QVBoxLayout>
-#include <QVTKOpenGLNativeWidget.h>
+#include <QVTKOpenGLStereoWidget.h>
 #include <vtkGenericOpenGLRenderWindow.h>
 #include <vtkRenderer.h>
 
@@ -32,6 +33,14 @@ namespace fetouch::app::trainer {
 namespace {
 
 constexpr int kImageSize = 256;
+// The window's tick: it shows the newest ultrasound image, the plots and the status line, and asks
+// for the next image, up to 50 times a second.
+constexpr int kTickMs = 20;
+// The 3D view renders at most every kViewPeriodS, and takes at most kViewShare of the window's
+// thread: a software renderer's 37 ms render (Xvfb) was every tick's, so the view's rate was the
+// ultrasound's too (14 images/s). Rendered every other tick or so instead, the ultrasound follows
+// the solver and the probe (docs/trainer.md, "What the window draws, and how often").
+constexpr double kViewPeriodS = 0.03, kViewShare = 2.0 / 3.0;
 constexpr double kImageWidthM = 0.12, kImageDepthM = 0.10;
 
 // The ultrasound image's plane: through `at`, looking along -normal, lateral along x or y.
@@ -52,7 +61,7 @@ TrainerWindow::TrainerWindow(const config::Scene& scene, const TrainerOptions& s
   setWindowTitle(QString::fromStdString("Fetouch trainer: " + scene.name));
   volume_ = std::make_shared<const ReferenceVolume>(scene_ultrasound(scene_, gain_, volume_description_));
 
-  vtk_widget_ = new QVTKOpenGLNativeWidget(this);
+  vtk_widget_ = new QVTKOpenGLStereoWidget(this);
   auto render_window = vtkSmartPointer<vtkGenericOpenGLRenderWindow>::New();
   vtk_widget_->setRenderWindow(render_window);
   render_window_ = render_window;
@@ -93,6 +102,7 @@ TrainerWindow::TrainerWindow(const config::Scene& scene, const TrainerOptions& s
   split->addWidget(vtk_widget_);
   split->addWidget(side);
   split->setStretchFactor(0, 3), split->setStretchFactor(1, 2);
+  split->setSizes({860, 420});  // of the window's 1,280 pixels
   setCentralWidget(split);
   status_ = new QLabel(this);
   message_ = new QLabel(this);
@@ -168,7 +178,7 @@ TrainerWindow::TrainerWindow(const config::Scene& scene, const TrainerOptions& s
   }
   timer_ = new QTimer(this);
   connect(timer_, &QTimer::timeout, this, [this] { tick(); });
-  timer_->start(30);
+  timer_->start(kTickMs);
   started_ = rate_from_ = std::chrono::steady_clock::now();
   cpu_ = sample_cpu();
 }
@@ -295,6 +305,7 @@ void TrainerWindow::tick() {
     session_->start();
     start_pending_ = false;
     take_started_ = std::chrono::steady_clock::now(), take_images_ = figures_.ultrasound_images;
+    take_renders_ = figures_.renders;
   }
   take_mode_verdict();
   exercise_tick();
@@ -336,8 +347,13 @@ void TrainerWindow::tick() {
     }
   }
   if (imager_->take(image_)) show_ultrasound();
-  render_window_->Render();
-  ++figures_.renders;
+  if (view_due()) {
+    rendered_at_ = std::chrono::steady_clock::now();
+    render_window_->Render();
+    render_s_ = seconds_since(rendered_at_);
+    ++figures_.renders;
+    figures_.render_seconds += render_s_;
+  }
   force_plot_->update();
   frame_plot_->update();
   margin_plot_->update();
@@ -364,9 +380,14 @@ void TrainerWindow::tick() {
     }
     figures_.wall_s = seconds_since(started_);
     figures_.ultrasound_per_s = (figures_.ultrasound_images - take_images_) / seconds_since(take_started_);
+    figures_.renders_per_s = (figures_.renders - take_renders_) / seconds_since(take_started_);
     timer_->stop();
     close();
   }
+}
+
+bool TrainerWindow::view_due() const {
+  return seconds_since(rendered_at_) >= std::max(kViewPeriodS, render_s_ / kViewShare);
 }
 
 void TrainerWindow::image_now() {
@@ -424,7 +445,8 @@ void TrainerWindow::update_status() {
     << " s   haptic " << std::lround(haptic_hz_) << " Hz   solver " << std::lround(solver_hz_) << " Hz   "
     << haptics::to_string(model_) << " / " << haptics::to_string(hold_) << "   Kp " << std::lround(shown_.proportional_gain)
     << " Ki " << std::lround(shown_.integral_gain) << "   margin " << shown_.stability_margin << "   late ticks "
-    << monitor.late_ticks.load() << "   overruns " << overruns_ << "   ultrasound " << std::lround(ultrasound_hz_) << " img/s";
+    << monitor.late_ticks.load() << "   overruns " << overruns_ << "   ultrasound " << std::lround(ultrasound_hz_)
+    << " img/s   view " << std::lround(view_hz_) << " Hz";
   // What the hand feels: the passivity layer when it scales a probe's force, and the identified
   // stiffness against the frame's (docs/stability.md, sections 9 and 10).
   const std::vector<std::string>& names = session_->probe_names();
@@ -464,7 +486,15 @@ bool TrainerWindow::save_screenshot(const std::filesystem::path& file) {
   render_window_->Render();
   std::error_code ignored;
   if (file.has_parent_path()) std::filesystem::create_directories(file.parent_path(), ignored);
-  return grab().save(QString::fromStdString(file.string()));
+  // The 3D view is a window of its own inside this one, which grab() leaves blank: its frame,
+  // rendered now, is drawn where it shows.
+  QPixmap picture = grab();
+  {
+    QPainter painter(&picture);
+    const QImage view = vtk_widget_->grabFramebuffer();
+    painter.drawImage(QRect(vtk_widget_->mapTo(this, QPoint(0, 0)), vtk_widget_->size()), view);
+  }
+  return picture.save(QString::fromStdString(file.string()));
 }
 
 }  // namespace fetouch::app::trainer

@@ -26,7 +26,7 @@ class QPushButton;
 class QToolBar;
 class QLabel;
 class QTimer;
-class QVTKOpenGLNativeWidget;
+class QVTKOpenGLStereoWidget;
 class vtkGenericOpenGLRenderWindow;
 class vtkRenderer;
 
@@ -70,6 +70,8 @@ struct WindowFigures {
   double ultrasound_per_s = 0;    // shown per second of the last take, from its start to its end
   double wall_s = 0;
   long renders = 0;
+  double render_seconds = 0;  // spent rendering the 3D view (its surfaces' normals included)
+  double renders_per_s = 0;   // of the last take, as ultrasound_per_s
   // Other programs' use of the CPU, measured each second (app/machine_load.h): the most, in cores,
   // and the seconds in which it reached kBusyCores (the status line then says so).
   double others_cores_max = 0;
@@ -142,6 +144,7 @@ class TrainerWindow : public QMainWindow {
   void start_take(const std::optional<std::filesystem::path>& recording);
   void tick();
   void show_ultrasound();
+  bool view_due() const;  // whether this tick renders the 3D view
   void image_now();  // the ultrasound image through the first probe's patch, made here and shown
   void update_status();
   void take_mode_verdict();
@@ -165,7 +168,7 @@ class TrainerWindow : public QMainWindow {
   std::shared_ptr<const ReferenceVolume> volume_;
   double gain_ = 1;
   std::string volume_description_;
-  QVTKOpenGLNativeWidget* vtk_widget_ = nullptr;
+  QVTKOpenGLStereoWidget* vtk_widget_ = nullptr;
   vtkGenericOpenGLRenderWindow* render_window_ = nullptr;
   vtkRenderer* renderer_ = nullptr;
   QLabel *ultrasound_ = nullptr, *status_ = nullptr, *message_ = nullptr;
@@ -195,9 +198,11 @@ class TrainerWindow : public QMainWindow {
   Eigen::Vector3d imaged_at_ = Eigen::Vector3d::Zero();  // where the shown image's plane went through
   double haptic_hz_ = 0, solver_hz_ = 0, ultrasound_hz_ = 0, view_hz_ = 0, others_cores_ = 0;
   CpuSample cpu_;
+  std::chrono::steady_clock::time_point rendered_at_{};  // the last render of the 3D view began
+  double render_s_ = 0;                                  // and took this long
   long rate_renders_ = 0;
   std::chrono::steady_clock::time_point started_, rate_from_, take_started_;
-  long rate_ticks_ = 0, rate_frames_ = 0, rate_images_ = 0, take_images_ = 0;
+  long rate_ticks_ = 0, rate_frames_ = 0, rate_images_ = 0, take_images_ = 0, take_renders_ = 0;
   WindowFigures figures_;
   TissueSnapshot shown_;
   QLabel* guide_ = nullptr;

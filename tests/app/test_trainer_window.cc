@@ -10,7 +10,8 @@
 #include <QApplication>
 #include <QSurfaceFormat>
 #include <QTest>
-#include <QVTKOpenGLNativeWidget.h>
+#include <QVTKOpenGLStereoWidget.h>
+#include <QVTKOpenGLWindow.h>
 #include <vtkPointData.h>
 #include <vtkPolyData.h>
 #include <yaml-cpp/yaml.h>
@@ -279,6 +280,36 @@ TEST_F(TrainerWindowTest, TheMouseProbeFollowsTheCursorIntoTheTissue) {
               1e3 * depth, held_force, 1e3 * d1, held_force, 1e3 * d2, f2, needed, 100 * (held_force / needed - 1));
   EXPECT_GT(depth, 5e-3);
   EXPECT_NEAR(held_force / needed, 1, 0.10);
+}
+
+// The 3D view is a window of its own inside the trainer's (it renders straight to the screen, not
+// through Qt's composition: docs/trainer.md). Keys typed while it has the focus still reach the
+// window: the shortcuts (space pauses) and the view's own keys (] pushes the mouse probe's cursor
+// 1 mm along the view, away from the eye).
+TEST_F(TrainerWindowTest, KeysTypedInThe3DViewReachTheWindow) {
+  app::trainer::TrainerOptions session;
+  session.mouse = true;
+  app::trainer::WindowOptions options;
+  options.out = out_;
+  TrainerWindow w(scene("fetus_simple.yaml"), session, options);
+  w.show();
+  QApplication::setActiveWindow(&w);
+  ASSERT_TRUE(w.session() && w.session()->cursor());
+  auto* view = w.findChild<QVTKOpenGLStereoWidget*>();
+  ASSERT_NE(view, nullptr);
+  QWindow* embedded = view->embeddedOpenGLWindow();
+  ASSERT_TRUE(QTest::qWaitForWindowExposed(embedded));
+  QTest::mouseClick(embedded, Qt::LeftButton, Qt::NoModifier, QPoint(view->width() / 2, view->height() / 2));
+  QTest::qWait(300);
+  const Eigen::Vector3d before = w.cursor();
+  QTest::keyClick(embedded, Qt::Key_BracketRight);
+  EXPECT_NEAR((w.cursor() - before).norm(), 1e-3, 1e-9) << "] in the view moves the cursor 1 mm";
+  QTest::keyClick(embedded, Qt::Key_Space);
+  QTest::qWait(200);
+  EXPECT_TRUE(w.session()->paused()) << "space in the view pauses";
+  const long paused_at = w.session()->monitor().ticks.load();
+  QTest::qWait(300);
+  EXPECT_EQ(w.session()->monitor().ticks.load(), paused_at);
 }
 
 // M and H ask for the next local model and the other hold. On the default scene (gains chosen
