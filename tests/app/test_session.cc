@@ -17,12 +17,15 @@
 #include "app/realtime_cores.h"
 #include "app/session.h"
 #include "haptics/linear_surface_environment.h"
+#include "tests/support/thread_nice.h"
 
 namespace fetouch::app {
 namespace {
 
 namespace fs = std::filesystem;
 using haptics::ContactFrame;
+using testing::NiceRights;
+using testing::nice_rights;
 
 // Two contacts 3 cm apart on a flat surface, coupled (pressing one moves the other).
 haptics::LinearSurfaceEnvironment two_contacts() {
@@ -205,16 +208,9 @@ class NiceRecordingEnvironment final : public haptics::Environment {
 };
 
 TEST(RealtimeSession, TheSolverThreadRunsAheadOfOtherProgramsWhereItMay) {
-  int started = 0, raised = 0;
-  std::thread probe([&] {
-    const auto tid = static_cast<id_t>(syscall(SYS_gettid));
-    started = getpriority(PRIO_PROCESS, tid);
-    setpriority(PRIO_PROCESS, tid, kSolverNice);
-    raised = getpriority(PRIO_PROCESS, tid);
-  });
-  probe.join();
-  const int expected = raised == kSolverNice ? kSolverNice : started;
-  std::printf("[ note ] a thread here %s raise its nice to %d\n", raised == kSolverNice ? "may" : "may not", kSolverNice);
+  const NiceRights rights = nice_rights(kSolverNice);
+  const int started = rights.started, expected = rights.expected(kSolverNice);
+  std::printf("[ note ] a thread here %s raise its nice to %d\n", rights.may ? "may" : "may not", kSolverNice);
 
   auto inner = two_contacts();
   NiceRecordingEnvironment environment(inner);

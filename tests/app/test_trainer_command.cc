@@ -4,8 +4,6 @@
 // without a display the command says to use xvfb-run and exits 2.
 #include <gtest/gtest.h>
 #include <signal.h>
-#include <sys/resource.h>
-#include <sys/syscall.h>
 #include <sys/wait.h>
 #include <unistd.h>
 #include <vtkDataArray.h>
@@ -18,10 +16,10 @@
 #include <cstdlib>
 #include <filesystem>
 #include <regex>
-#include <thread>
 
 #include "app/realtime_cores.h"
 #include "tests/support/run_command.h"
+#include "tests/support/thread_nice.h"
 
 namespace fetouch::testing {
 namespace {
@@ -141,17 +139,9 @@ TEST(TrainerCommand, SaysTheMachineIsBusyWhileAnotherProgramKeepsACore) {
   EXPECT_GE(json_number(r.out, "busy_s"), 1.0) << r.out;
   EXPECT_EQ(json_number(r.out, "ticks"), 3000) << r.out;
   // Ahead of it where the process may raise a thread's priority (a thread of the test's tries).
-  int started = 0, raised = 0;
-  std::thread probe([&] {
-    const auto tid = static_cast<id_t>(syscall(SYS_gettid));
-    started = getpriority(PRIO_PROCESS, tid);
-    setpriority(PRIO_PROCESS, tid, app::kSolverNice);
-    raised = getpriority(PRIO_PROCESS, tid);
-  });
-  probe.join();
-  const bool may = raised == app::kSolverNice;
-  EXPECT_EQ(json_number(r.out, "solver_nice"), may ? app::kSolverNice : started) << r.out;
-  EXPECT_EQ(json_number(r.out, "window_nice"), may ? app::kWindowNice : started) << r.out;
+  const NiceRights rights = nice_rights(app::kSolverNice);
+  EXPECT_EQ(json_number(r.out, "solver_nice"), rights.expected(app::kSolverNice)) << r.out;
+  EXPECT_EQ(json_number(r.out, "window_nice"), rights.expected(app::kWindowNice)) << r.out;
 }
 
 TEST(TrainerCommand, WithoutADisplayItSaysToUseXvfbAndExits2) {
