@@ -16,7 +16,9 @@
 #include <QVBoxLayout>
 #include <QVTKOpenGLStereoWidget.h>
 #include <vtkGenericOpenGLRenderWindow.h>
+#include <vtkImageData.h>
 #include <vtkRenderer.h>
+#include <vtkWindowToImageFilter.h>
 
 #include <cmath>
 #include <sstream>
@@ -483,15 +485,27 @@ void TrainerWindow::export_views(const std::filesystem::path& screenshot) {
 }
 
 bool TrainerWindow::save_screenshot(const std::filesystem::path& file) {
-  render_window_->Render();
   std::error_code ignored;
   if (file.has_parent_path()) std::filesystem::create_directories(file.parent_path(), ignored);
-  // The 3D view is a window of its own inside this one, which grab() leaves blank: its frame,
-  // rendered now, is drawn where it shows.
+  // The 3D view is a window of its own inside this one, which grab() leaves blank: it is rendered
+  // now, read back from VTK's own framebuffer (Qt's may not have been painted yet) and drawn where
+  // it shows.
+  auto frame = vtkSmartPointer<vtkWindowToImageFilter>::New();
+  frame->SetInput(render_window_);
+  frame->SetInputBufferTypeToRGB();
+  frame->ReadFrontBufferOff();
+  frame->ShouldRerenderOn();
+  frame->Update();
+  vtkImageData* pixels = frame->GetOutput();
+  int size[3] = {0, 0, 0};
+  pixels->GetDimensions(size);
+  QImage view(size[0], size[1], QImage::Format_RGB888);
+  const auto* rgb = static_cast<const unsigned char*>(pixels->GetScalarPointer());
+  for (int row = 0; rgb && row < size[1]; ++row)  // VTK's rows go up, an image's down
+    std::copy_n(rgb + std::size_t(size[1] - 1 - row) * 3 * size[0], 3 * size[0], view.scanLine(row));
   QPixmap picture = grab();
   {
     QPainter painter(&picture);
-    const QImage view = vtk_widget_->grabFramebuffer();
     painter.drawImage(QRect(vtk_widget_->mapTo(this, QPoint(0, 0)), vtk_widget_->size()), view);
   }
   return picture.save(QString::fromStdString(file.string()));

@@ -8,6 +8,7 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 #include <QApplication>
+#include <QImage>
 #include <QSurfaceFormat>
 #include <QTest>
 #include <QVTKOpenGLStereoWidget.h>
@@ -104,11 +105,32 @@ TEST_F(TrainerWindowTest, InterfacesAreDrawnSmoothRegionByRegionAndEachCanBeHidd
     }
 
     // Each region's toggle hides its surfaces and shows them again; an unknown name is refused.
+    // The screenshot shows the view as it is at once: taken just before and just after a region is
+    // hidden, with no event between, the 3D view's pixels differ (the view is a window of its own,
+    // whose frame the screenshot reads back from VTK, not what Qt last painted).
+    const fs::path shown_png = out_ / ("shown-" + file + ".png"), hidden_png = out_ / ("hidden-" + file + ".png");
+    auto* widget = w.findChild<QVTKOpenGLStereoWidget*>();
+    ASSERT_TRUE(widget && QTest::qWaitForWindowExposed(widget->embeddedOpenGLWindow()));
+    QTest::qWait(300);
+    EXPECT_TRUE(w.save_screenshot(shown_png));
     const std::string name = view->region_name(0);
     EXPECT_TRUE(w.set_region_visible(name, false));
     EXPECT_FALSE(view->region_visible(0));
     EXPECT_TRUE(view->region_visible(1));
-    EXPECT_TRUE(w.save_screenshot(out_ / ("hidden-" + file + ".png")));
+    EXPECT_TRUE(w.save_screenshot(hidden_png));
+    {
+      const QImage before(QString::fromStdString(shown_png.string())), after(QString::fromStdString(hidden_png.string()));
+      ASSERT_TRUE(!before.isNull() && before.size() == after.size());
+      const QRect area(widget->mapTo(&w, QPoint(0, 0)), widget->size());
+      long differ = 0;
+      for (int y = area.top(); y <= area.bottom(); ++y)
+        for (int x = area.left(); x <= area.right(); ++x) {
+          const QRgb a = before.pixel(x, y), b = after.pixel(x, y);
+          differ += std::abs(qRed(a) - qRed(b)) + std::abs(qGreen(a) - qGreen(b)) + std::abs(qBlue(a) - qBlue(b)) > 30;
+        }
+      std::printf("hiding %s changed %ld of the 3D view's %d pixels\n", name.c_str(), differ, area.width() * area.height());
+      EXPECT_GT(differ, 500) << "the second screenshot shows " << name << " hidden";
+    }
     EXPECT_TRUE(w.set_region_visible(name, true));
     EXPECT_TRUE(view->region_visible(0));
     EXPECT_FALSE(w.set_region_visible("no such region", false));
