@@ -254,13 +254,8 @@ double static_depth(const fs::path& scene, const Eigen::Vector3d& patch, const E
 // patch at the depth the recording shows (within 10 %): the static force for that depth is found by
 // two solves (the held force, then the secant's next guess) and interpolated between them.
 TEST_F(TrainerWindowTest, TheMouseProbeFollowsTheCursorIntoTheTissue) {
-  app::trainer::TrainerOptions session;
-  session.mouse = true;
-  app::trainer::WindowOptions options;
-  options.out = out_;
-  TrainerWindow w(scene("fetus_simple.yaml"), session, options);
-  w.show();
-  QApplication::setActiveWindow(&w);
+  const std::unique_ptr<TrainerWindow> window = mouse_window("fetus_simple.yaml");
+  TrainerWindow& w = *window;
   w.toggle_recording();  // a take from rest, recorded
   ASSERT_TRUE(w.session() && w.session()->cursor() && w.recording());
   const fs::path take = *w.recording();
@@ -309,13 +304,8 @@ TEST_F(TrainerWindowTest, TheMouseProbeFollowsTheCursorIntoTheTissue) {
 // window: the shortcuts (space pauses) and the view's own keys (] pushes the mouse probe's cursor
 // 1 mm along the view, away from the eye).
 TEST_F(TrainerWindowTest, KeysTypedInThe3DViewReachTheWindow) {
-  app::trainer::TrainerOptions session;
-  session.mouse = true;
-  app::trainer::WindowOptions options;
-  options.out = out_;
-  TrainerWindow w(scene("fetus_simple.yaml"), session, options);
-  w.show();
-  QApplication::setActiveWindow(&w);
+  const std::unique_ptr<TrainerWindow> window = mouse_window("fetus_simple.yaml");
+  TrainerWindow& w = *window;
   ASSERT_TRUE(w.session() && w.session()->cursor());
   auto* view = w.findChild<QVTKOpenGLStereoWidget*>();
   ASSERT_NE(view, nullptr);

@@ -11,10 +11,12 @@
 
 #include <cstdlib>
 #include <filesystem>
+#include <memory>
 #include <optional>
 #include <string>
 
 #include "app/scene_mesh.h"
+#include "app/trainer/trainer_window.h"
 
 namespace fetouch::testing {
 
@@ -44,6 +46,18 @@ class TrainerWindowTest : public ::testing::Test {
     application();
     out_ = std::filesystem::temp_directory_path() / ("fetouch_trainer_window_" + std::to_string(::getpid()));
     std::filesystem::remove_all(out_);
+  }
+  // A window on a shipped scene with the mouse driving its first probe, its takes in out_, shown
+  // and made the active window (shortcuts go to it; Xvfb has no window manager).
+  std::unique_ptr<app::trainer::TrainerWindow> mouse_window(const std::string& file) {
+    app::trainer::TrainerOptions session;
+    session.mouse = true;
+    app::trainer::WindowOptions options;
+    options.out = out_;
+    auto w = std::make_unique<app::trainer::TrainerWindow>(scene(file), session, options);
+    w->show();
+    QApplication::setActiveWindow(w.get());
+    return w;
   }
   std::filesystem::path out_;
 };
