@@ -1,7 +1,7 @@
 // `fetouch trainer`'s window (Qt 5 + VTK 9): the 3D view of the tissue as solved, the ultrasound
 // image through the deformed tissue, force and frame-time plots, a status line, and the controls
 // (docs/trainer.md lists each with its shortcut). The window owns a TrainerSession and reads it
-// through lock-free hand-overs on a 30 ms timer: it never blocks the haptic or solver threads.
+// through lock-free hand-overs on a 20 ms timer: it never blocks the haptic or solver threads.
 #pragma once
 
 #include <QMainWindow>
