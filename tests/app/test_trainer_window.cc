@@ -9,6 +9,7 @@
 #include <unistd.h>
 #include <QApplication>
 #include <QImage>
+#include <QMouseEvent>
 #include <QSurfaceFormat>
 #include <QTest>
 #include <QVTKOpenGLStereoWidget.h>
@@ -302,8 +303,8 @@ TEST_F(TrainerWindowTest, TheMouseProbeFollowsTheCursorIntoTheTissue) {
 // The 3D view is a window of its own inside the trainer's (it renders straight to the screen, not
 // through Qt's composition: docs/trainer.md). Keys typed while it has the focus still reach the
 // window: the shortcuts (space pauses) and the view's own keys (] pushes the mouse probe's cursor
-// 1 mm along the view, away from the eye).
-TEST_F(TrainerWindowTest, KeysTypedInThe3DViewReachTheWindow) {
+// 1 mm along the view, away from the eye); so does the mouse (shift+move moves the cursor).
+TEST_F(TrainerWindowTest, KeysAndTheMouseInThe3DViewReachTheWindow) {
   const std::unique_ptr<TrainerWindow> window = mouse_window("fetus_simple.yaml");
   TrainerWindow& w = *window;
   ASSERT_TRUE(w.session() && w.session()->cursor());
@@ -316,6 +317,17 @@ TEST_F(TrainerWindowTest, KeysTypedInThe3DViewReachTheWindow) {
   const Eigen::Vector3d before = w.cursor();
   QTest::keyClick(embedded, Qt::Key_BracketRight);
   EXPECT_NEAR((w.cursor() - before).norm(), 1e-3, 1e-9) << "] in the view moves the cursor 1 mm";
+  // Shift+move in the view moves the cursor in the view plane: to a point 50 px left of the middle,
+  // 50 px right, and back (the same point again, 100 px of the view apart from the other).
+  const auto shift_move = [&](int dx) {
+    const QPointF at(view->width() / 2 + dx, view->height() / 2);
+    QMouseEvent move(QEvent::MouseMove, at, at, view->mapToGlobal(at.toPoint()), Qt::NoButton, Qt::NoButton, Qt::ShiftModifier);
+    QApplication::sendEvent(embedded, &move);
+    return w.cursor();
+  };
+  const Eigen::Vector3d left = shift_move(-50), right = shift_move(50), again = shift_move(-50);
+  EXPECT_GT((right - left).norm(), 1e-3) << "shift+move in the view moves the cursor";
+  EXPECT_LT((again - left).norm(), 1e-9) << "the same pixel, the same place";
   QTest::keyClick(embedded, Qt::Key_Space);
   QTest::qWait(200);
   EXPECT_TRUE(w.session()->paused()) << "space in the view pauses";
