@@ -3,8 +3,6 @@
 // haptics::LockstepSession renders for the same device points (the runtime adds no timing of its
 // own); two runs record the same forces; the summary agrees with the recording.
 #include <gtest/gtest.h>
-#include <sys/resource.h>
-#include <sys/syscall.h>
 #include <unistd.h>
 
 #include <atomic>
@@ -196,9 +194,7 @@ class NiceRecordingEnvironment final : public haptics::Environment {
   int contacts() const override { return inner_.contacts(); }
   void initial(haptics::EnvironmentUpdate& out) override { inner_.initial(out); }
   void solve(const std::vector<haptics::ContactSample>& samples, long frame, haptics::EnvironmentUpdate& out) override {
-    errno = 0;
-    const int nice = getpriority(PRIO_PROCESS, static_cast<id_t>(syscall(SYS_gettid)));
-    if (errno == 0) nice_ = nice;
+    nice_ = thread_nice();
     inner_.solve(samples, frame, out);
   }
   std::atomic<int> nice_{1000};
