@@ -153,6 +153,16 @@ void BM_FemLinearSolve(benchmark::State& state) {
   state.counters["cg_per_column"] = c.linear_iterations / 6.0;
   state.counters["ms_per_column"] = 1e3 * c.solves_s / 6;
   state.counters["ms_per_cg"] = c.linear_iterations > 0 ? 1e3 * c.solves_s / c.linear_iterations : 0.0;
+  // AMG's hierarchy: levels, the first coarse level's rows against the fine one's, and the operator
+  // complexity (all levels' nonzeros over the fine level's).
+  const auto levels = solver.multigrid_levels();
+  if (!levels.empty()) {
+    double nonzeros = 0;
+    for (const auto& level : levels) nonzeros += static_cast<double>(level.nonzeros);
+    state.counters["levels"] = static_cast<double>(levels.size());
+    state.counters["coarse_ratio"] = levels.size() > 1 ? double(levels[1].rows) / double(levels[0].rows) : 0.0;
+    state.counters["op_complexity"] = nonzeros / static_cast<double>(levels[0].nonzeros);
+  }
 }
 }  // namespace
 

@@ -112,6 +112,18 @@ std::vector<int> Discretisation::dof_components() const {
   return component;
 }
 
+int Discretisation::node_block_size() const {
+  bool nodal = dof.n_dofs() % 3 == 0 && owned_begin % 3 == 0 && owned_end % 3 == 0;
+  if (nodal) {
+    std::map<types::global_dof_index, Point<3>> points;
+    DoFTools::map_dofs_to_support_points(*mapping, dof, points);
+    const std::vector<int> component = dof_components();
+    for (types::global_dof_index i = 0; i < dof.n_dofs() && nodal; ++i)
+      nodal = component[i] == static_cast<int>(i % 3) && points.at(i).distance(points.at(i - i % 3)) == 0;
+  }
+  return all_ranks(nodal) ? 3 : 1;  // every rank's matrix has the same block size
+}
+
 std::vector<std::vector<double>> Discretisation::rigid_body_modes(const std::vector<bool>& constrained) const {
   std::map<types::global_dof_index, Point<3>> points;
   DoFTools::map_dofs_to_support_points(*mapping, dof, points);

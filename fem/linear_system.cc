@@ -54,7 +54,8 @@ void LinearSystem::set_up(const std::vector<Support>& supports, TangentSystem::M
   }
   const bool amg = method == TangentSystem::Method::amg;
   tangent_.set_pattern(std::move(row_start), std::move(columns), method, d_.owned_begin, d_.owned_end,
-                       amg ? d_.rigid_body_modes(constrained_) : std::vector<std::vector<double>>{});
+                       amg ? d_.rigid_body_modes(constrained_) : std::vector<std::vector<double>>{},
+                       amg ? d_.node_block_size() : 1);
   y_current_ = false;
   scatter_.clear();
   ++pattern_revision_;

@@ -75,6 +75,9 @@ std::vector<std::string> QuasiStaticSolver::terms() const {
 
 void QuasiStaticSolver::set_deterministic_factorisations(bool on) { impl_->system.tangent().set_deterministic(on); }
 int QuasiStaticSolver::late_background_frames() const { return impl_->system.tangent().late_background_frames(); }
+std::vector<TangentSystem::Level> QuasiStaticSolver::multigrid_levels() const {
+  return impl_->system.tangent().multigrid_levels();
+}
 
 void QuasiStaticSolver::use_algebraic_multigrid(bool on) {
   impl_->method = on ? TangentSystem::Method::amg : TangentSystem::Method::factorisation;

@@ -63,6 +63,8 @@ class QuasiStaticSolver {
   // Solves so far that went on without a due background factorisation (not deterministic): each
   // differs from what lockstep solves within the solve's tolerance, and so may every one after it.
   int late_background_frames() const;
+  // AMG's levels as set up last, fine first (rows, nonzeros); empty on the direct path.
+  std::vector<TangentSystem::Level> multigrid_levels() const;
   QuasiStaticSolver(QuasiStaticSolver&&) noexcept;
   QuasiStaticSolver& operator=(QuasiStaticSolver&&) noexcept;
 

@@ -24,8 +24,9 @@
 // A K that is not positive definite falls back to PETSc's MUMPS LDL'.
 //
 // Or, selectable (and chosen by size in the scene), CG preconditioned by algebraic multigrid
-// (PETSc's GAMG, plain aggregation, told the rigid-body modes as its near-null space), set up
-// again when CG needs half as many iterations again as it did after the last set-up.
+// (PETSc's GAMG, plain aggregation of nodes matched along their heaviest couplings, told the
+// rigid-body modes as its near-null space), set up again when CG needs half as many iterations
+// again as it did after the last set-up.
 //
 // In parallel the matrix is PETSc's MPIAIJ over a communicator, each rank owning a contiguous block
 // of rows, with MUMPS as the factorisation (CHOLMOD is serial). Every rank keeps the whole CSR
@@ -53,9 +54,10 @@ class TangentSystem {
 
   // The sparsity: row_start (rows + 1 entries) and the column indices of each row, sorted; this
   // rank owns rows [owned_begin, owned_end) (all of them on one rank). A new pattern drops the
-  // factorisation. `near_null_space`: for AMG, the rigid-body modes (each a whole vector).
+  // factorisation. For AMG: `near_null_space`, the rigid-body modes (each a whole vector), and
+  // `node_block`, the dofs a node (3 where rows 3k..3k+2 are one node's x, y, z).
   void set_pattern(std::vector<int> row_start, std::vector<int> columns, Method method, int owned_begin, int owned_end,
-                   const std::vector<std::vector<double>>& near_null_space = {});
+                   const std::vector<std::vector<double>>& near_null_space = {}, int node_block = 1);
   Method method() const { return method_; }
   std::size_t rows() const;
   std::size_t nonzeros() const { return values_.size(); }
@@ -127,6 +129,12 @@ class TangentSystem {
   int refactor_after_iterations = 5;
   // Factorisations so far.
   int factorisations() const { return factorisations_; }
+  // AMG's hierarchy as set up last, the fine level first: rows and stored entries (nonzeros) of each
+  // level's operator. Empty for the direct path and before the first AMG solve.
+  struct Level {
+    std::size_t rows = 0, nonzeros = 0;
+  };
+  std::vector<Level> multigrid_levels() const;
 
  private:
   void factor(SolveStats& stats);
@@ -150,6 +158,7 @@ class TangentSystem {
   std::vector<int> local_row_start_;  // the owned rows' offsets, from 0 (parallel)
   std::vector<double> near_null_space_;
   int near_null_vectors_ = 0;
+  int node_block_ = 1;
   std::vector<int> row_start_, columns_, diagonal_;
   std::vector<double> values_;
   bool refactor_ = true;
