@@ -152,8 +152,8 @@ void TangentSystem::create_solver(const char* type) {
     check(PCGAMGSetNSmooths(p.pc, 0), "choosing plain aggregation");
     // Aggregates of nodes, not of single dofs (PETSc takes a node's dofs as one vertex of its graph
     // when the matrix has their block size), matched along the heaviest couplings (HEM). PETSc's
-    // default pairs a dof with about one neighbour a level (MIS on the dof graph), so each
-    // aggregate's 6 rigid-body modes made coarse levels nearly as large as the fine one.
+    // default (MIS on the graph of single dofs) grouped about five dofs, and each group's 6
+    // rigid-body modes made the first coarse level 43 % of the fine one (docs/benchmarks.md).
     check(MatSetBlockSize(p.mat, node_block_), "telling the nodes");
     PetscBool chosen = PETSC_FALSE;
     check(PetscOptionsHasName(nullptr, nullptr, "-mat_coarsen_type", &chosen), "reading options");

@@ -130,7 +130,7 @@ class TangentSystem {
   // Factorisations so far.
   int factorisations() const { return factorisations_; }
   // AMG's hierarchy as set up last, the fine level first: rows and stored entries (nonzeros) of each
-  // level's operator. Empty for the direct path and before the first AMG solve.
+  // level's operator. Empty for the direct path and before the first AMG solve. Collective under MPI.
   struct Level {
     std::size_t rows = 0, nonzeros = 0;
   };

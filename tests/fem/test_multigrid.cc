@@ -7,6 +7,7 @@
 #include <deal.II/grid/tria.h>
 
 #include <cmath>
+#include <cstdio>
 #include <vector>
 
 #include "fem/material.h"
