@@ -28,7 +28,23 @@ FullMatrix<double> CondensedCompliance::compute(LinearSystem& system, const std:
   // The basis B and K B: the first round replaces the old columns by their Galerkin combination Z
   // (K Z = H' - R comes for free); each round then adds P^-1 R, at the cost of 3m products with K
   // and one blocked application of the factorisation.
-  std::vector<Vector<double>> basis = z, kb(basis.size(), Vector<double>(n));
+  std::vector<Vector<double>> basis = z;
+  // With a liquid's rank-one part c g g' (c ~ 10^13) in the operator, a basis vector's component
+  // along g weighs c (g'b)^2 in B'(K + c g g')B and drowns the K part there: the projection loses
+  // its digits and the rounds stall (the default replay's presses took 4-7 rounds, a first touch 6
+  // and then solved its columns). So every basis vector is made g-free, b - (g'b / g'w) w, and
+  // the carrier w = (P + c g g')^-1 g, the one direction along g, joins the basis once.
+  const Vector<double>* g = system.rank_one_c() != 0 ? system.rank_one_g() : nullptr;
+  Vector<double> carrier;
+  const auto deflate = [&](Vector<double>& b) {
+    if (g) b.add(-(*g * b) / (*g * carrier), carrier);
+  };
+  if (g && !basis.empty()) {
+    system.apply_factorisation_to_rank_one_g(carrier);
+    for (Vector<double>& b : basis) deflate(b);
+    basis.push_back(carrier);
+  }
+  std::vector<Vector<double>> kb(basis.size(), Vector<double>(n));
   system.multiply(basis, kb);
   // B'K B and H B, grown by the new directions' rows and columns each round (entries below `known`
   // hold; B'K B taken symmetric, as it is).
@@ -71,11 +87,12 @@ FullMatrix<double> CondensedCompliance::compute(LinearSystem& system, const std:
     system.apply_factorisation(residuals.data(), corrections.data(), static_cast<int>(columns));
     // The span keeps every direction so far (a block Krylov space): the Galerkin solution in it is
     // the best in the energy norm, as block CG's would be.
-    if (round == 0) basis = z, kb = std::move(kz), known = 0;
+    if (round == 0 && !g) basis = z, kb = std::move(kz), known = 0;  // (with a liquid, z is not g-free)
     std::vector<Vector<double>> d(columns, Vector<double>(n)), kd(columns, Vector<double>(n));
     for (unsigned int k = 0; k < columns; ++k) {
       std::copy_n(corrections.begin() + std::size_t(k) * n, n, d[k].begin());
       system.constraints().distribute(d[k]);
+      deflate(d[k]);
     }
     system.multiply(d, kd);
     for (unsigned int k = 0; k < columns; ++k) basis.push_back(std::move(d[k])), kb.push_back(std::move(kd[k]));
