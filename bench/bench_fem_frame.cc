@@ -157,11 +157,9 @@ void BM_FemLinearSolve(benchmark::State& state) {
   // complexity (all levels' nonzeros over the fine level's).
   const auto levels = solver.multigrid_levels();
   if (!levels.empty()) {
-    double nonzeros = 0;
-    for (const auto& level : levels) nonzeros += static_cast<double>(level.nonzeros);
     state.counters["levels"] = static_cast<double>(levels.size());
     state.counters["coarse_ratio"] = levels.size() > 1 ? double(levels[1].rows) / double(levels[0].rows) : 0.0;
-    state.counters["op_complexity"] = nonzeros / static_cast<double>(levels[0].nonzeros);
+    state.counters["op_complexity"] = TangentSystem::operator_complexity(levels);
   }
 }
 }  // namespace

@@ -36,11 +36,13 @@ FullMatrix<double> CondensedCompliance::compute(LinearSystem& system, const std:
   // the carrier w = (P + c g g')^-1 g, the one direction along g, joins the basis once.
   const Vector<double>* g = system.rank_one_c() != 0 ? system.rank_one_g() : nullptr;
   Vector<double> carrier;
+  double g_carrier = 0;  // g'w
   const auto deflate = [&](Vector<double>& b) {
-    if (g) b.add(-(*g * b) / (*g * carrier), carrier);
+    if (g) b.add(-(*g * b) / g_carrier, carrier);
   };
   if (g && !basis.empty()) {
     system.apply_factorisation_to_rank_one_g(carrier);
+    g_carrier = *g * carrier;
     for (Vector<double>& b : basis) deflate(b);
     basis.push_back(carrier);
   }

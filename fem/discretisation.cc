@@ -112,25 +112,19 @@ std::vector<int> Discretisation::dof_components() const {
   return component;
 }
 
-int Discretisation::node_block_size() const {
-  bool nodal = dof.n_dofs() % 3 == 0 && owned_begin % 3 == 0 && owned_end % 3 == 0;
-  if (nodal) {
-    std::map<types::global_dof_index, Point<3>> points;
-    DoFTools::map_dofs_to_support_points(*mapping, dof, points);
-    const std::vector<int> component = dof_components();
-    for (types::global_dof_index i = 0; i < dof.n_dofs() && nodal; ++i)
-      nodal = component[i] == static_cast<int>(i % 3) && points.at(i).distance(points.at(i - i % 3)) == 0;
-  }
-  return all_ranks(nodal) ? 3 : 1;  // every rank's matrix has the same block size
-}
-
-std::vector<std::vector<double>> Discretisation::rigid_body_modes(const std::vector<bool>& constrained) const {
+Discretisation::NearNullSpace Discretisation::near_null_space(const std::vector<bool>& constrained) const {
   std::map<types::global_dof_index, Point<3>> points;
   DoFTools::map_dofs_to_support_points(*mapping, dof, points);
   const std::vector<int> component = dof_components();
+  bool nodal = dof.n_dofs() % 3 == 0 && owned_begin % 3 == 0 && owned_end % 3 == 0;
+  for (types::global_dof_index i = 0; i < dof.n_dofs() && nodal; ++i)
+    nodal = component[i] == static_cast<int>(i % 3) && points.at(i).distance(points.at(i - i % 3)) == 0;
+  NearNullSpace out;
+  out.node_block = all_ranks(nodal) ? 3 : 1;  // every rank's matrix has the same block size
   Point<3> centre;
   for (const auto& [i, x] : points) centre += x / static_cast<double>(points.size());
-  std::vector<std::vector<double>> modes(6, std::vector<double>(dof.n_dofs(), 0.0));
+  std::vector<std::vector<double>>& modes = out.modes;
+  modes.assign(6, std::vector<double>(dof.n_dofs(), 0.0));
   for (const auto& [i, x] : points) {
     if (constrained[i]) continue;
     const int c = component[i];
@@ -151,7 +145,7 @@ std::vector<std::vector<double>> Discretisation::rigid_body_modes(const std::vec
     const double norm = std::sqrt(std::inner_product(modes[a].begin(), modes[a].end(), modes[a].begin(), 0.0));
     for (double& v : modes[a]) v /= norm;
   }
-  return modes;
+  return out;
 }
 
 std::vector<Discretisation::Piece> Discretisation::pieces(const std::vector<bool>& constrained) const {

@@ -54,12 +54,15 @@ class Discretisation {
 
   // The displacement component of every dof.
   std::vector<int> dof_components() const;
-  // 3 when the dofs come in threes, the x, y and z of one point together (dofs 3k, 3k+1, 3k+2) and
-  // this rank's rows start and end at a node; 1 otherwise. Algebraic multigrid then aggregates nodes.
-  int node_block_size() const;
-  // The rigid-body modes (3 translations, 3 rotations about the centroid), orthonormal, zero on
-  // constrained dofs: algebraic multigrid's near-null space.
-  std::vector<std::vector<double>> rigid_body_modes(const std::vector<bool>& constrained) const;
+  // What algebraic multigrid is told: the rigid-body modes (3 translations, 3 rotations about the
+  // centroid), orthonormal, zero on constrained dofs; and the dofs a node, 3 when they come in
+  // threes, the x, y and z of one point together (dofs 3k, 3k+1, 3k+2), and every rank's rows start
+  // and end at a node (1 otherwise): multigrid then aggregates nodes.
+  struct NearNullSpace {
+    std::vector<std::vector<double>> modes;
+    int node_block = 1;
+  };
+  NearNullSpace near_null_space(const std::vector<bool>& constrained) const;
 
   // The body's pieces (cells joined through shared vertices), each with the rigid motions that the
   // constrained dofs leave free ("translation along x", "rotation about z", or "rotation about the

@@ -52,10 +52,10 @@ void LinearSystem::set_up(const std::vector<Support>& supports, TangentSystem::M
     }
     row_start.push_back(static_cast<int>(columns.size()));
   }
-  const bool amg = method == TangentSystem::Method::amg;
-  tangent_.set_pattern(std::move(row_start), std::move(columns), method, d_.owned_begin, d_.owned_end,
-                       amg ? d_.rigid_body_modes(constrained_) : std::vector<std::vector<double>>{},
-                       amg ? d_.node_block_size() : 1);
+  const Discretisation::NearNullSpace space =
+      method == TangentSystem::Method::amg ? d_.near_null_space(constrained_) : Discretisation::NearNullSpace{};
+  tangent_.set_pattern(std::move(row_start), std::move(columns), method, d_.owned_begin, d_.owned_end, space.modes,
+                       space.node_block);
   y_current_ = false;
   scatter_.clear();
   ++pattern_revision_;

@@ -203,6 +203,13 @@ std::vector<TangentSystem::Level> TangentSystem::multigrid_levels() const {
   return levels;
 }
 
+double TangentSystem::operator_complexity(const std::vector<Level>& levels) {
+  if (levels.empty() || levels[0].nonzeros == 0) return 0;
+  double nonzeros = 0;
+  for (const Level& level : levels) nonzeros += static_cast<double>(level.nonzeros);
+  return nonzeros / static_cast<double>(levels[0].nonzeros);
+}
+
 int TangentSystem::position(int row, int column) const {
   const int* begin = columns_.data() + row_start_[row];
   const int* end = columns_.data() + row_start_[row + 1];

@@ -135,6 +135,8 @@ class TangentSystem {
     std::size_t rows = 0, nonzeros = 0;
   };
   std::vector<Level> multigrid_levels() const;
+  // All levels' nonzeros over the fine level's (0 without levels).
+  static double operator_complexity(const std::vector<Level>& levels);
 
  private:
   void factor(SolveStats& stats);
