@@ -33,7 +33,7 @@ class CavityTerm final : public Term {
   double rank_one_load() const override;
   void complete_step(const LinearSystem& system, dealii::Vector<double>& du) override;
   void take_step(double alpha) override { pressure_ = step_start_ + alpha * dp_; }
-  bool restore(dealii::Vector<double>& u, LinearSystem& system) override;
+  bool restore(dealii::Vector<double>& u, LinearSystem& system, double negligible_force) override;
   double unknown() const override { return pressure_; }
   void set_unknown(double value) override { pressure_ = value; }
   bool satisfied() const override { return std::abs(volume_residual_) <= 1e-10 * reference_volume_; }

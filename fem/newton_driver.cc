@@ -94,10 +94,10 @@ void NewtonDriver::set_unknowns(const std::vector<double>& values) {
 // A restoration is a second-order correction: when the tangent it needs cannot be factorised (a
 // state past a limit point), the state stays as it is, and the Newton step that follows meets the
 // same singular tangent and fails the step cleanly (rolled back, cut), rather than throwing.
-void NewtonDriver::restore(std::size_t i) {
+void NewtonDriver::restore(std::size_t i, double negligible_force) {
   own(i, [&] {
     try {
-      terms_[i]->restore(u_, system_);
+      terms_[i]->restore(u_, system_, negligible_force);
     } catch (const std::runtime_error&) {
     }
   });
@@ -124,8 +124,12 @@ StepReport NewtonDriver::newton(double lambda, const NewtonSettings& s, double r
   bool assembled = false;  // r and the tangent are already those of the current u
   // A frame starts from a linear prediction, which misses a liquid's volume to second order (its
   // stiffness turns that into large forces): the terms restore their own equations first.
+  // Under a frame's accuracy policy a restoration that would move the nodal forces by under 1 % of
+  // its force tolerance is left out (the policy still judges the residual it leaves).
+  const double negligible_force =
+      frame && s.position_tolerance_m > 0 && s.force_tolerance_n > 0 ? 1e-2 * s.force_tolerance_n : 0.0;
   if (frame && tangent_assembled_)
-    for (std::size_t i = 0; i < terms_.size(); ++i) restore(i);
+    for (std::size_t i = 0; i < terms_.size(); ++i) restore(i, negligible_force);
   for (int it = 0; it <= s.max_iterations; ++it) {
     // A frame's first correction solves with the previous frame's tangent, still in the matrix
     // (a frame moves the state little): the first assembly is the residual's alone. The trial step
@@ -204,7 +208,7 @@ StepReport NewtonDriver::newton(double lambda, const NewtonSettings& s, double r
       u_.add(alpha, du);
       for (std::size_t i = 0; i < terms_.size(); ++i) {
         terms_[i]->take_step(alpha);
-        restore(i);  // the step's second-order miss of a term's own equation
+        restore(i, negligible_force);  // the step's second-order miss of a term's own equation
       }
       const bool full = b == 0;
       if (!assemble(lambda, trial_r, /*tangent=*/full)) {

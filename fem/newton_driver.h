@@ -135,7 +135,7 @@ class NewtonDriver {
   // right-hand side; r itself when no term has one. Valid until the next call.
   const dealii::Vector<double>& eliminated(const dealii::Vector<double>& r);
   // term i's restore(u), a factorisation that fails leaving u as it was.
-  void restore(std::size_t i);
+  void restore(std::size_t i, double negligible_force);
   // Runs `work` of term i's own (not its assembly), timed against it.
   template <class Work>
   void own(std::size_t i, const Work& work);

@@ -60,8 +60,12 @@ class Term {
   virtual void take_step(double /*alpha*/) {}
   // u was moved by a linear prediction (a frame's first guess): restore the term's own equation to
   // first order by moving u and the unknown along a direction that keeps the force balance to first
-  // order (given by the factorisation of a recent tangent, `system`). Returns whether u moved.
-  virtual bool restore(dealii::Vector<double>& /*u*/, LinearSystem& /*system*/) { return false; }
+  // order (given by the factorisation of a recent tangent, `system`), unless the nodal force the
+  // restoration would move is at most `negligible_force` (N; 0: only when there is nothing to do).
+  // Returns whether u moved.
+  virtual bool restore(dealii::Vector<double>& /*u*/, LinearSystem& /*system*/, double /*negligible_force*/) {
+    return false;
+  }
   // The term's own equation holds (a cavity's volume law), beside the residual's norm.
   virtual bool satisfied() const { return true; }
   // The term's residual is minus the gradient of an energy of u alone (hyperelasticity, dead loads,
