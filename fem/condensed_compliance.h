@@ -19,6 +19,8 @@ struct ComplianceTimes {
   int linear_iterations = 0, factorisations = 0;
   double galerkin_residual = 0;  // of the last columns' Galerkin update (0: none)
   bool refined = false;          // the columns were solved again
+  int recycled_directions = 0;   // directions of the update before that joined the span
+  bool carrier_kept = false;     // the liquid's carrier was the one kept from an earlier update
 };
 
 // The relative residual to which compliance columns K^-1 h are solved.
@@ -29,6 +31,8 @@ inline constexpr double kComplianceTolerance = 1e-9;
 inline constexpr double kGalerkinTolerance = 1e-3;
 // Rounds of enlarging the span by preconditioned residuals before the columns are solved afresh.
 inline constexpr int kMaxGalerkinRounds = 6;
+// Directions of the last update's rounds kept for the next one, per column of W.
+inline constexpr std::size_t kRecycledPerColumn = 4;
 
 class CondensedCompliance {
  public:
@@ -38,11 +42,14 @@ class CondensedCompliance {
                                      ComplianceTimes& times);
   // Z = K^-1 H' of the last W (empty before the first, or after clear()).
   const std::vector<dealii::Vector<double>>& columns() const { return z_; }
-  void clear() { z_.clear(); }
+  void clear() { z_.clear(), recycled_.clear(), carrier_.reinit(0); }
   double galerkin_tolerance = kGalerkinTolerance;
 
  private:
   std::vector<dealii::Vector<double>> z_;
+  std::vector<dealii::Vector<double>> recycled_;  // the last rounds' directions, newest first
+  dealii::Vector<double> carrier_;  // (P + c g g')^-1 g of the liquid's g, at some earlier state
+  double carrier_cosine_ = 0;       // its cosine with g when it was computed
 };
 
 }  // namespace fetouch::fem

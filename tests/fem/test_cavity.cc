@@ -238,6 +238,60 @@ TEST(Cavity, ComplianceCouplesOppositeProbesThroughTheWater) {
   EXPECT_GT(wet, 2 * std::abs(dry));
 }
 
+// Frames of a press on the water-filled sphere, 6 % more force each: each compliance is the Galerkin
+// update that keeps the water's carrier from an earlier frame and takes in the directions the last
+// update added. Each W must still be a fresh solver's W at the same load (one that reaches it from
+// scratch and solves its columns afresh) to the update's error bound, and both mechanisms must
+// have been used.
+TEST(Cavity, AFrameComplianceWithKeptDirectionsMatchesAFreshSolve) {
+  dealii::Triangulation<3> tria;
+  const NeoHookean material(lame_lambda(5000, 0.45), lame_mu(5000, 0.45));
+  QuasiStaticSolver framed = held_sphere(tria, material, true);
+  const int probe = framed.add_contact_patch(Point<3>(0, 0, kOuter), 0.015);
+  NewtonSettings settings;
+  settings.relative_tolerance = 1e-10;
+  settings.load_steps = 2;
+  Tensor<1, 3> force;
+  force[2] = -0.2;
+  framed.set_patch_force(probe, force);
+  ASSERT_TRUE(framed.solve(settings).converged);
+  framed.compliance();
+  settings.load_steps = 1;
+  int kept_carriers = 0, recycled = 0;
+  for (int frame = 1; frame <= 6; ++frame) {
+    force[2] *= 1.06;
+    framed.set_patch_force(probe, force);
+    ASSERT_TRUE(framed.solve(settings).converged) << "frame " << frame;
+    const dealii::FullMatrix<double> w = framed.compliance();
+    const ComplianceTimes& times = framed.last_compliance_times();
+    kept_carriers += times.carrier_kept;
+    recycled += times.recycled_directions > 0;
+
+    dealii::Triangulation<3> fresh_tria;
+    QuasiStaticSolver fresh = held_sphere(fresh_tria, material, true);
+    fresh.add_contact_patch(Point<3>(0, 0, kOuter), 0.015);
+    fresh.set_patch_force(probe, force);
+    NewtonSettings from_scratch = settings;
+    from_scratch.load_steps = 3;
+    ASSERT_TRUE(fresh.solve(from_scratch).converged) << "frame " << frame;
+    const dealii::FullMatrix<double> w_fresh = fresh.compliance();
+    double worst = 0, largest = 0;
+    for (unsigned int i = 0; i < 3; ++i)
+      for (unsigned int j = 0; j < 3; ++j) {
+        worst = std::max(worst, std::abs(w(i, j) - w_fresh(i, j)));
+        largest = std::max(largest, std::abs(w_fresh(i, j)));
+      }
+    std::printf("frame %d: Galerkin residual %.2e, carrier kept %d, %d directions recycled, solved again %d; "
+                "|W - W_fresh| / |W| = %.2e\n",
+                frame, times.galerkin_residual, times.carrier_kept, times.recycled_directions, times.refined,
+                worst / largest);
+    EXPECT_LT(worst, 1e-5 * largest) << "frame " << frame;
+    EXPECT_FALSE(times.refined) << "frame " << frame << ": the update did not get there and solved its columns";
+  }
+  EXPECT_GT(kept_carriers, 0) << "no frame kept the water's carrier";
+  EXPECT_GT(recycled, 0) << "no frame took in the last update's directions";
+}
+
 TEST(Cavity, RefusesASurfaceThatEnclosesNothing) {
   dealii::Triangulation<3> tria;
   shell(tria, false, 0);
