@@ -17,13 +17,15 @@ namespace fetouch::fem {
 using namespace dealii;
 
 std::string describe_frame(const SolveReport& r, const ComplianceTimes& c) {
-  char line[400];
+  char line[400], kept[80] = "";
+  if (c.recycled_directions > 0 || c.carrier_kept)
+    std::snprintf(kept, sizeof kept, ", kept %d directions%s", c.recycled_directions, c.carrier_kept ? " and the carrier" : "");
   std::snprintf(line, sizeof line,
                 "newton %d%s (%.1f ms: assembly %.1f, factor %.1f, solve %.1f ms, cg %d); compliance (%.1f ms: assembly "
-                "%.1f, factor %.1f, solve %.1f ms, cg %d, galerkin %.1e%s)",
+                "%.1f, factor %.1f, solve %.1f ms, cg %d, galerkin %.1e%s%s)",
                 r.total_iterations, r.carried ? " carried" : "", 1e3 * r.total_s, 1e3 * r.assembly_s,
                 1e3 * r.factorisation_s, 1e3 * r.solve_s, r.linear_iterations, 1e3 * c.total_s, 1e3 * c.assembly_s,
-                1e3 * c.factorisation_s, 1e3 * c.solves_s, c.linear_iterations, c.galerkin_residual,
+                1e3 * c.factorisation_s, 1e3 * c.solves_s, c.linear_iterations, c.galerkin_residual, kept,
                 c.refined ? ", solved" : "");
   std::string text = line;
   // The background factorisation: one taken up at the start (and how long the frame waited for
