@@ -145,7 +145,9 @@ FullMatrix<double> CondensedCompliance::compute(LinearSystem& system, const std:
       carrier_cosine_ = g_carrier / (g->l2_norm() * carrier.l2_norm());
       basis[carrier_index] = carrier;
       system.multiply(carrier, kb[carrier_index]);
-      known = 0;  // B'K B and H B again (a few dozen products, no solve)
+      for (unsigned int a = 0; a < known; ++a)  // its row and column of B'K B and H B
+        gram(a, carrier_index) = gram(carrier_index, a) = basis[a] * kb[carrier_index];
+      for (unsigned int k = 0; k < columns; ++k) hb(k, carrier_index) = h[k] * basis[carrier_index];
     }
     // The span keeps every direction so far (a block Krylov space): the Galerkin solution in it is
     // the best in the energy norm, as block CG's would be.
