@@ -95,7 +95,7 @@ FullMatrix<double> CondensedCompliance::compute(LinearSystem& system, const std:
   // The directions the last compliance's rounds added (where the factorisation missed K then) join
   // the span, at the cost of products with K only, when the old columns alone do not do.
   bool recycled = recycled_.empty();
-  std::vector<Vector<double>> added;  // this compliance's rounds' directions, for the next one
+  std::vector<std::size_t> added;  // where this compliance's rounds' directions are in the basis
   for (int round = 0; !solve_columns;) {
     const unsigned int size = static_cast<unsigned int>(basis.size());
     FullMatrix<double> grown(size, size), hb_grown(columns, size);
@@ -161,15 +161,17 @@ FullMatrix<double> CondensedCompliance::compute(LinearSystem& system, const std:
     }
     system.multiply(d, kd);
     for (unsigned int k = 0; k < columns; ++k) {
-      added.push_back(d[k]);
+      added.push_back(basis.size());
       basis.push_back(std::move(d[k])), kb.push_back(std::move(kd[k]));
     }
   }
-  // The newest directions first, then the kept ones, at most kRecycledPerColumn per column.
-  std::reverse(added.begin(), added.end());
-  for (Vector<double>& r : recycled_) added.push_back(std::move(r));
-  if (added.size() > kRecycledPerColumn * columns) added.resize(kRecycledPerColumn * columns);
-  recycled_ = std::move(added);
+  // The newest directions first, then the kept ones, at most kRecycledPerColumn per column (the
+  // basis is not used after this).
+  std::vector<Vector<double>> kept;
+  for (auto k = added.rbegin(); k != added.rend(); ++k) kept.push_back(std::move(basis[*k]));
+  for (Vector<double>& r : recycled_) kept.push_back(std::move(r));
+  if (kept.size() > kRecycledPerColumn * columns) kept.resize(kRecycledPerColumn * columns);
+  recycled_ = std::move(kept);
   times.galerkin_residual = std::isfinite(worst) ? worst : 0;
   if (solve_columns) {
     const bool warm = z.size() == columns;
