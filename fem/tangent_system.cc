@@ -42,6 +42,9 @@ void limit_library_threads() {
   thread_local const bool done = [] {
     using SetThreads = void (*)(int);
     if (auto omp = reinterpret_cast<SetThreads>(dlsym(RTLD_DEFAULT, "omp_set_num_threads"))) omp(1);
+    // CHOLMOD's supernodal factorisation asks for 4 threads by a num_threads clause (a constant of
+    // its build), which omp_set_num_threads does not override: no active parallel level at all does.
+    if (auto levels = reinterpret_cast<SetThreads>(dlsym(RTLD_DEFAULT, "omp_set_max_active_levels"))) levels(0);
     if (auto blas = reinterpret_cast<SetThreads>(dlsym(RTLD_DEFAULT, "openblas_set_num_threads"))) blas(1);
     return true;
   }();
