@@ -108,7 +108,7 @@ void LinearSystem::solve(const Vector<double>& rhs, Vector<double>& x, double to
   const TangentSystem::SolveStats stats = tangent_.solve(rhs.begin(), x.begin(), tolerance, zero_guess);
   account(stats);
   if (rank_one_c_ != 0 && !stats.rank_one) {
-    // The solve was with K_s alone (PETSc's paths): Sherman-Morrison, (K_s + c g g')^-1 b =
+    // The solve was with K_s alone (multigrid): Sherman-Morrison, (K_s + c g g')^-1 b =
     // x - c (g.x) / (1 + c g.y) y, x = K_s^-1 b, y = K_s^-1 g.
     const Vector<double>& g = *rank_one_g_;
     if (!y_current_) {

@@ -337,7 +337,8 @@ void TangentSystem::gather(double* x) const {
 }
 
 TangentSystem::SolveStats TangentSystem::solve(const double* b, double* x, double tolerance, bool zero_guess) {
-  if (direct_cholmod_) return solve_cholmod(b, x, tolerance, zero_guess);
+  if (direct_cholmod_ || method_ == Method::factorisation) return solve_factorised(b, x, tolerance, zero_guess);
+  // Multigrid: PETSc's CG, preconditioned by GAMG.
   Petsc& p = *petsc_;
   SolveStats stats;
   const int n = static_cast<int>(rows());
@@ -349,12 +350,6 @@ TangentSystem::SolveStats TangentSystem::solve(const double* b, double* x, doubl
     Petsc& p;
     ~Unplace() { VecResetArray(p.b), VecResetArray(p.x); }
   } unplace{p};
-  const bool amg = method_ == Method::amg;
-  const auto direct = [&] {
-    const auto start = std::chrono::steady_clock::now();
-    check(PCApply(p.pc, p.b, p.x), "solving with the factorisation");
-    stats.solve_s += since(start);
-  };
   const auto cg = [&](int limit) {
     const auto start = std::chrono::steady_clock::now();
     check(KSPSetInitialGuessNonzero(p.ksp, PETSC_TRUE), "setting the initial guess");
@@ -368,23 +363,16 @@ TangentSystem::SolveStats TangentSystem::solve(const double* b, double* x, doubl
     stats.solve_s += since(start);
     if (reason > 0) {
       if (baseline_iterations_ < 0) baseline_iterations_ = static_cast<int>(iterations);
-      // Multigrid drifts from its own first count; a factorisation from one iteration (solve_cholmod).
-      const int allowed = amg ? std::max(refactor_after_iterations, 3 * baseline_iterations_ / 2) : refactor_after_iterations;
-      if (iterations > allowed) {
-        if (in_frame_ && !amg) request_background();  // the same schedule as on one rank
-        else refactor_ = true;
-      }
+      // Multigrid drifts from its own first count (a factorisation from one iteration: solve_factorised).
+      if (iterations > std::max(refactor_after_iterations, 3 * baseline_iterations_ / 2)) refactor_ = true;
     }
     return reason > 0;
   };
-  const int limit = amg ? 1000 : in_frame_ ? max_background_cg_iterations : max_cg_iterations;
-  // No factorisation yet, one due, or CG on the old one failed (it drifted too far from K, or K lost
-  // definiteness): set up again, then solve directly (or by CG on the fresh multigrid).
-  if (!p.factored || refactor_ || !cg(limit)) {
+  // No hierarchy yet, one due, or CG on the old one failed (it drifted too far from K, or K lost
+  // definiteness): set up again, then solve by CG on the fresh multigrid.
+  if (!p.factored || refactor_ || !cg(1000)) {
     factor(stats);
-    if (!amg) {
-      direct();
-    } else if (!cg(limit)) {
+    if (!cg(1000)) {
       // Multigrid cannot carry every tangent: nearly incompressible tissue (nu -> 0.5), where the
       // volumetric stiffness dwarfs the shear, left CG at its limit on every load step (the random
       // scenes found it: 32 failed frames of 42). A sparse factorisation (MUMPS) can, at its cost:
@@ -392,11 +380,26 @@ TangentSystem::SolveStats TangentSystem::solve(const double* b, double* x, doubl
       method_ = Method::factorisation;
       create_solver(MATSOLVERMUMPS);
       factor(stats);
-      direct();
+      check(PCApply(p.pc, p.b, p.x), "solving with the factorisation");
     }
   }
   gather(x);
   return stats;
+}
+
+bool TangentSystem::factored() const { return direct_cholmod_ ? factor_ && factor_->valid() : petsc_->factored; }
+
+// P^-1 b for one column, P the current factorisation (CHOLMOD's, or PETSc's gathered onto every
+// rank), without the rank-one part and untimed.
+void TangentSystem::apply_factor(const double* b, double* x) {
+  if (direct_cholmod_) return factor_->solve(b, x, 1);
+  Petsc& p = *petsc_;
+  check(VecPlaceArray(p.b, b + owned_begin_), "wrapping a right-hand side");
+  check(VecPlaceArray(p.x, x + owned_begin_), "wrapping a solution");
+  const PetscErrorCode code = PCApply(p.pc, p.b, p.x);
+  VecResetArray(p.b), VecResetArray(p.x);
+  check(code, "applying the factorisation");
+  gather(x);
 }
 
 void TangentSystem::set_rank_one(double c, const double* g) {
@@ -467,14 +470,7 @@ void TangentSystem::apply_raw(const double* b, double* x, int columns, SolveStat
     MatDestroy(&solution);
     check(code, "applying the factorisation to a block");
   } else {  // one column at a time
-    for (int k = 0; k < columns; ++k) {
-      check(VecPlaceArray(p.b, b + std::size_t(k) * n + owned_begin_), "wrapping a right-hand side");
-      check(VecPlaceArray(p.x, x + std::size_t(k) * n + owned_begin_), "wrapping a solution");
-      const PetscErrorCode code = PCApply(p.pc, p.b, p.x);
-      VecResetArray(p.b), VecResetArray(p.x);
-      check(code, "applying the preconditioner");
-      gather(x + std::size_t(k) * n);
-    }
+    for (int k = 0; k < columns; ++k) apply_factor(b + std::size_t(k) * n, x + std::size_t(k) * n);
   }
   stats.solve_s += since(start);
 }

@@ -14,8 +14,9 @@
 // Constrained (fixed) unknowns are rows and columns with only a diagonal entry, of the size of the
 // mean free diagonal so that the preconditioner sees a well-scaled matrix.
 //
-// On one rank the factorisation is CHOLMOD's supernodal LL', called directly (cholesky_factor.h),
-// and CG is this class's own. Within haptic frames (begin_frame(true)) a solve never pays a
+// On one rank the factorisation is CHOLMOD's supernodal LL', called directly (cholesky_factor.h).
+// CG with a factorisation is this class's own on every path (CHOLMOD, or PETSc's MUMPS on several
+// ranks), so that a solve takes the same iterations on any number of ranks. Within haptic frames (begin_frame(true)) a solve never pays a
 // factorisation: when CG needs more than refactor_after_iterations, the current K is handed to a
 // worker thread that factorises it while frames go on with the old factorisation, and the new one is
 // taken up at the start of the frame `swap_after_frames` later (waited for there if not ready, so
@@ -88,9 +89,9 @@ class TangentSystem {
   };
   // A dense rank-one part c g g' of the operator (a liquid's volume constraint: c up to 10^13), or
   // none (c = 0). g has rows() entries and must outlive the solves; rank_one_moved() when its values
-  // change. On one rank with CHOLMOD, solve() then solves with K + c g g' itself (CG on it,
-  // preconditioned by (P + c g g')^-1 by Sherman-Morrison; SolveStats::rank_one set); the PETSc paths
-  // solve with K alone and leave the rank-one part to the caller. apply_factorisation() always
+  // change. With a factorisation, solve() then solves with K + c g g' itself (CG on it,
+  // preconditioned by (P + c g g')^-1 by Sherman-Morrison; SolveStats::rank_one set); the multigrid
+  // path solves with K alone and leaves the rank-one part to the caller. apply_factorisation() always
   // applies (P + c g g')^-1.
   void set_rank_one(double c, const double* g);
   void rank_one_moved() { pg_current_ = false; }
@@ -141,7 +142,10 @@ class TangentSystem {
  private:
   void factor(SolveStats& stats);
   bool cholmod() const { return direct_cholmod_; }
-  SolveStats solve_cholmod(const double* b, double* x, double tolerance, bool zero_guess);
+  // CG preconditioned by the current factorisation, CHOLMOD's or PETSc's (tangent_system_cholmod.cc).
+  SolveStats solve_factorised(const double* b, double* x, double tolerance, bool zero_guess);
+  bool factored() const;                            // a factorisation to precondition with
+  void apply_factor(const double* b, double* x);  // P^-1 b, one column, untimed
   bool factor_cholmod(SolveStats& stats);  // false: not positive definite (PETSc takes over)
   void set_up_cholmod();
   void reset_cholmod();

@@ -1,6 +1,7 @@
-// TangentSystem on one rank with CHOLMOD called directly: the background factoriser, the schedule
-// on which its factorisations are taken up (shared with the PETSc path, so that MPI = serial), and
-// conjugate gradients preconditioned by the current factorisation. tangent_system.h says why.
+// TangentSystem with a factorisation: CHOLMOD called directly on one rank, the background
+// factoriser, the schedule on which its factorisations are taken up (shared with the PETSc path, so
+// that MPI = serial), and conjugate gradients preconditioned by the current factorisation (CHOLMOD's
+// or PETSc's). tangent_system.h says why.
 #include <petscksp.h>
 #include <pthread.h>
 #include <sched.h>
@@ -169,13 +170,24 @@ double TangentSystem::begin_frame(bool frame) {
 }
 
 // Preconditioned CG on the current K (+ c g g') with the factorisation of an earlier one (+ c g g',
-// by Sherman-Morrison); a fresh factorisation solves directly.
-TangentSystem::SolveStats TangentSystem::solve_cholmod(const double* b, double* x, double tolerance, bool zero_guess) {
+// by Sherman-Morrison); a fresh factorisation solves directly. One loop for CHOLMOD on one rank and
+// for PETSc's factorisations (MUMPS on several ranks, or LDL' where K is not positive definite): every
+// rank holds K and the whole vectors, so every rank runs the same iterations, and a frame solves
+// the same way on any number of ranks to whatever tolerance it asks.
+TangentSystem::SolveStats TangentSystem::solve_factorised(const double* b, double* x, double tolerance, bool zero_guess) {
   SolveStats stats;
   const int n = static_cast<int>(rows());
+  for (auto* v : {&r_, &z_, &p_, &q_}) v->resize(n);
   if (zero_guess) std::fill(x, x + n, 0.0);
+  // A new factorisation of the current K; false where CHOLMOD found K not positive definite (PETSc's
+  // LDL' takes over: solve() again).
+  const auto refactor_now = [&] {
+    if (direct_cholmod_) return factor_cholmod(stats);
+    factor(stats);
+    return true;
+  };
   const auto precondition = [&](const double* in, double* out) {
-    factor_->solve(in, out);
+    apply_factor(in, out);
     apply_rank_one(out, 1, stats);
   };
   const double* g = rank_one_g_;
@@ -191,8 +203,8 @@ TangentSystem::SolveStats TangentSystem::solve_cholmod(const double* b, double* 
     stats.solve_s += since(start);
     stats.rank_one = rank_one_c_ != 0;
   };
-  if (!factor_->valid() || refactor_) {
-    if (!factor_cholmod(stats)) return solve(b, x, tolerance, false);
+  if (!factored() || refactor_) {
+    if (!refactor_now()) return solve(b, x, tolerance, false);
     direct();
     return stats;
   }
@@ -238,7 +250,7 @@ TangentSystem::SolveStats TangentSystem::solve_cholmod(const double* b, double* 
   }
   // CG on the old factorisation did not get there: factorise K now and solve directly.
   std::fill(x, x + n, 0.0);
-  if (!factor_cholmod(stats)) return solve(b, x, tolerance, true);
+  if (!refactor_now()) return solve(b, x, tolerance, true);
   direct();
   return stats;
 }
