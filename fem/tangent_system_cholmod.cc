@@ -242,7 +242,10 @@ TangentSystem::SolveStats TangentSystem::solve_factorised(const double* b, doubl
     // refactor_after_iterations means K has drifted from it. (No baseline as for multigrid: a
     // factorisation taken up from the background is already a few frames old, and measuring drift
     // from its first count would let it age without bound.)
-    if (iterations > refactor_after_iterations) {
+    // A looser tolerance takes fewer iterations on the same drift, so their mean rate counts too
+    // (refactor_after_iterations at a tolerance of 1e-3 is a rate of 1e-3^(1/refactor_after_iterations)).
+    const double rate = iterations > 0 ? std::pow(std::sqrt(dot(r_, r_)) / b_norm, 1.0 / iterations) : 0.0;
+    if (iterations > refactor_after_iterations || rate > std::pow(1e-3, 1.0 / refactor_after_iterations)) {
       if (in_frame_) request_background();
       else refactor_ = true;
     }
