@@ -10,18 +10,20 @@
 #include <stdexcept>
 #include <string>
 
-#include <unistd.h>
 
 #include "app/mesh_pipeline.h"
 #include "app/scene_mesh.h"
+#include "tests/support/scratch_dir.h"
 
 namespace fetouch::app {
 namespace {
 
+using fetouch::testing::ScratchDir;
+
 namespace fs = std::filesystem;
 
-fs::path write_path(const std::string& name, const std::string& rows) {
-  const fs::path file = fs::temp_directory_path() / ("fetouch_refine_" + std::to_string(::getpid()) + "_" + name);
+fs::path write_path(const ScratchDir& scratch, const std::string& name, const std::string& rows) {
+  const fs::path file = scratch / name;
   std::ofstream(file) << "# t, x, y, z\n" << rows;
   return file;
 }
@@ -38,8 +40,9 @@ TEST(ProbeRefinement, TheBallHoldsEveryProbesPathWidenedByItsRadius) {
   scene.mesh.source = config::MeshSource::phantom;
   scene.mesh.meshing.refine_around_probes = true;
   scene.mesh.meshing.refine_size_m = 0.003;
-  const fs::path a = write_path("a.csv", "0, 0, 0, 0.06\n1, 0.01, 0.02, 0.04\n");
-  const fs::path b = write_path("b.csv", "0, -0.01, 0, 0.05\n0.5, -0.01, 0.01, 0.05\n");
+  const ScratchDir scratch("fetouch_refine");
+  const fs::path a = write_path(scratch, "a.csv", "0, 0, 0, 0.06\n1, 0.01, 0.02, 0.04\n");
+  const fs::path b = write_path(scratch, "b.csv", "0, -0.01, 0, 0.05\n0.5, -0.01, 0.01, 0.05\n");
   scene.probes.push_back(probe("left", config::DeviceType::replay, a, 0.005));
   scene.probes.push_back(probe("right", config::DeviceType::operator_model, b, 0.008));
   scene.probes.push_back(probe("mouse", config::DeviceType::mouse, {}, 0.02));  // no path: not counted
@@ -59,7 +62,7 @@ TEST(ProbeRefinement, TheBallHoldsEveryProbesPathWidenedByItsRadius) {
 
   scene.mesh.meshing.refine_around_probes = true;
   scene.probes.resize(1);
-  scene.probes[0].device.trajectory = write_path("bad.csv", "0, 0, 0, nan\n1, 0, 0, 0\n");
+  scene.probes[0].device.trajectory = write_path(scratch, "bad.csv", "0, 0, 0, nan\n1, 0, 0, 0\n");
   try {
     resolved_mesh_spec(scene);
     ADD_FAILURE() << "an unreadable path is refused";
@@ -73,7 +76,6 @@ TEST(ProbeRefinement, TheBallHoldsEveryProbesPathWidenedByItsRadius) {
   } catch (const std::runtime_error& e) {
     EXPECT_NE(std::string(e.what()).find("no probe has a trajectory"), std::string::npos) << e.what();
   }
-  fs::remove(a), fs::remove(b);
 }
 
 }  // namespace

@@ -12,13 +12,15 @@
 #include <sstream>
 #include <string>
 
-#include <unistd.h>
 
 #include "app/study/random_scenes.h"
 #include "config/scene_loader.h"
+#include "tests/support/scratch_dir.h"
 
 namespace fetouch::app {
 namespace {
+
+using fetouch::testing::ScratchDir;
 
 constexpr int kScenes = 24;  // what the CI run of the study draws (tests/app/test_study_command.cc)
 
@@ -41,10 +43,8 @@ std::vector<RandomScene> drawn(unsigned int seed) {
 }
 
 // The scene loaded as `fetouch replay` loads it: from its file, beside its trajectories.
-config::Scene load(const RandomScene& s) {
-  const std::filesystem::path dir =
-      std::filesystem::temp_directory_path() / ("fetouch_random_scenes_" + std::to_string(::getpid())) / s.name;
-  return config::load_scene(write_random_scene(s, dir)).scene;
+config::Scene load(const RandomScene& s, const ScratchDir& scratch) {
+  return config::load_scene(write_random_scene(s, scratch / s.name)).scene;
 }
 
 // `key: value` in a scene's text, the value ending there.
@@ -60,9 +60,10 @@ bool says(const std::string& text, const std::string& key, const std::string& va
 }
 
 TEST(RandomScenes, EveryDrawnSceneIsValidAndTheSeedFixesIt) {
+  const ScratchDir scratch("fetouch_random_scenes");
   for (const RandomScene& s : drawn(7)) {
     try {
-      load(s);
+      load(s, scratch);
     } catch (const config::SceneError& e) {
       ADD_FAILURE() << e.what() << "\n" << s.yaml;
     }
@@ -97,9 +98,10 @@ TEST(RandomScenes, EveryDocumentedValueIsDrawn) {
 
 // The loader's own enums, through the parsed scenes: what docs/scenes.md lists outside its tables.
 TEST(RandomScenes, EveryEnumOfTheLoaderIsDrawn) {
+  const ScratchDir scratch("fetouch_random_scenes");
   std::set<std::string> seen;
   for (const RandomScene& s : drawn(1)) {
-    const config::Scene scene = load(s);
+    const config::Scene scene = load(s, scratch);
     seen.insert(std::string("model ") + config::to_string(scene.material.model));
     if (scene.effects.has(config::Effect::inertia)) seen.insert(std::string("integrator ") + config::to_string(scene.effects.integrator));
     if (scene.effects.has(config::Effect::cavity)) seen.insert(std::string("law ") + config::to_string(scene.effects.cavity_law));

@@ -19,19 +19,13 @@
 
 #include "app/realtime_cores.h"
 #include "tests/support/run_command.h"
+#include "tests/support/scratch_dir.h"
 #include "tests/support/thread_nice.h"
 
 namespace fetouch::testing {
 namespace {
 
 namespace fs = std::filesystem;
-
-fs::path scratch(const std::string& name) {
-  const fs::path dir = fs::temp_directory_path() / ("fetouch_trainer_" + name + "_" + std::to_string(::getpid()));
-  fs::remove_all(dir);
-  fs::create_directories(dir);
-  return dir;
-}
 
 struct Png {
   int width = 0, height = 0;
@@ -68,7 +62,8 @@ double difference(const Png& a, const Png& b, double x0, double x1, double y0, d
 
 TEST(TrainerCommand, EveryShippedSceneOpensRunsAndClosesWithAScreenshot) {
   ASSERT_TRUE(std::getenv("DISPLAY")) << "this test opens windows: run it under xvfb-run -a (scripts/quickstart test does)";
-  const fs::path dir = scratch("scenes");
+  const ScratchDir scratch("fetouch_trainer_scenes");
+  const fs::path& dir = scratch.path();
   int ran = 0;
   for (const auto& entry : fs::directory_iterator(fs::path(FETOUCH_SOURCE_DIR) / "config" / "scenes")) {
     if (entry.path().extension() != ".yaml") continue;
@@ -92,7 +87,8 @@ TEST(TrainerCommand, EveryShippedSceneOpensRunsAndClosesWithAScreenshot) {
 
 TEST(TrainerCommand, TheProbesRegionChangesBetweenRestAndMidPress) {
   ASSERT_TRUE(std::getenv("DISPLAY")) << "run under xvfb-run -a";
-  const fs::path dir = scratch("press");
+  const ScratchDir scratch("fetouch_trainer_press");
+  const fs::path& dir = scratch.path();
   const std::string scene = (fs::path(FETOUCH_SOURCE_DIR) / "config" / "scenes" / "fetus_simple.yaml").string();
   // The scene's poke reaches the surface at 0.6 s and is 8 mm deep from 1.1 s to 2.1 s.
   const auto rest = run_command(fetouch("trainer " + scene + " --duration 0.3 --screenshot " + (dir / "rest.png").string() +
@@ -123,6 +119,7 @@ double json_number(const std::string& json, const std::string& key) {
 // Another program keeping a core busy for the whole take: the window measures it and says the
 // machine is busy (the summary counts the seconds it said so); nothing fails or is skipped for it.
 TEST(TrainerCommand, SaysTheMachineIsBusyWhileAnotherProgramKeepsACore) {
+  const ScratchDir scratch("fetouch_trainer_busy");
   ASSERT_TRUE(std::getenv("DISPLAY")) << "run under xvfb-run -a";
   const pid_t hog = fork();
   ASSERT_GE(hog, 0);
@@ -131,7 +128,7 @@ TEST(TrainerCommand, SaysTheMachineIsBusyWhileAnotherProgramKeepsACore) {
     for (;;) x = x + 1;
   }
   const std::string scene = (fs::path(FETOUCH_SOURCE_DIR) / "config" / "scenes" / "fetus_simple.yaml").string();
-  const auto r = run_command(fetouch("trainer " + scene + " --duration 3 --json --out " + scratch("busy").string()));
+  const auto r = run_command(fetouch("trainer " + scene + " --duration 3 --json --out " + scratch.path().string()));
   kill(hog, SIGKILL);
   waitpid(hog, nullptr, 0);
   ASSERT_EQ(r.exit_code, 0) << r.err;

@@ -11,17 +11,12 @@
 
 #include "tests/support/run_command.h"
 #include "tests/support/scene_variant.h"
+#include "tests/support/scratch_dir.h"
 
 namespace fetouch::testing {
 namespace {
 
 namespace fs = std::filesystem;
-
-fs::path scratch(const std::string& name) {
-  const fs::path dir = fs::temp_directory_path() / ("fetouch_valid_" + std::to_string(::getpid())) / name;
-  fs::create_directories(dir);
-  return dir;
-}
 
 const fs::path kBlock = fs::path(FETOUCH_SOURCE_DIR) / "config/scenes/block_press.yaml";
 const std::string kPoke = (fs::path(FETOUCH_SOURCE_DIR) / "config/scenes/trajectories/poke_block.csv").string();
@@ -36,8 +31,9 @@ double max_force(const fs::path& summary) {
 // A 1 mm probe on block_press, whose top faces are 25 to 6 mm across at refinements 0 to 2: it was
 // refused ("no boundary surface within the radius"); it now touches and feels a force.
 TEST(ValidScenesRun, AOneMillimetreProbeTouchesEveryMesh) {
+  const ScratchDir scratch("fetouch_valid");
   for (const int refinements : {0, 1, 2}) {
-    const fs::path dir = scratch("small_probe_" + std::to_string(refinements));
+    const fs::path dir = scratch.folder("small_probe_" + std::to_string(refinements));
     const fs::path scene = dir / "scene.yaml";
     ASSERT_TRUE(write_scene_variant(kBlock, "refinements: 2", "refinements: " + std::to_string(refinements), scene));
     std::string text = read_file_text(scene);
@@ -49,7 +45,7 @@ TEST(ValidScenesRun, AOneMillimetreProbeTouchesEveryMesh) {
   }
   for (const std::string shape : {"{shape: ball, radius_m: 0.03, refinements: 1}",
                                   "{shape: shell, radius_m: 0.03, inner_radius_m: 0.02, refinements: 1}"}) {
-    const fs::path dir = scratch(shape.substr(8, 4));
+    const fs::path dir = scratch.folder(shape.substr(8, 4));
     const std::string trajectory = (dir / "poke.csv").string();
     ASSERT_EQ(run_command(fetouch("trajectory poke --at 0 0 0.03 --normal 0 0 1 --depth 0.004 --out " + trajectory)).exit_code, 0);
     std::ofstream(dir / "scene.yaml")
@@ -68,7 +64,8 @@ TEST(ValidScenesRun, AOneMillimetreProbeTouchesEveryMesh) {
 // A block on a frictionless table alone: nothing stops it sliding. `check` says so, and a replay
 // fails with the motions named instead of replaying a tissue that floats away (max force 0 N).
 TEST(ValidScenesRun, ATissueNothingHoldsIsNamedByCheckAndByTheReplay) {
-  const fs::path dir = scratch("floating");
+  const ScratchDir scratch("fetouch_valid");
+  const fs::path dir = scratch.folder("floating");
   const fs::path scene = dir / "scene.yaml";
   ASSERT_TRUE(write_scene_variant(kBlock, "select: {physical_group: zmin}", "components: [z]\n    select: {physical_group: zmin}", scene));
   CommandResult r = run_command(fetouch("check " + scene.string()));
@@ -83,7 +80,8 @@ TEST(ValidScenesRun, ATissueNothingHoldsIsNamedByCheckAndByTheReplay) {
 // A soft Saint Venant-Kirchhoff block under its own weight (rho g H = 515 Pa on E = 100 Pa) collapses:
 // the model softens in compression. Exit 1 with that reason, not exit 2.
 TEST(ValidScenesRun, ATissueThatCannotCarryItsWeightSaysWhy) {
-  const fs::path dir = scratch("collapse");
+  const ScratchDir scratch("fetouch_valid");
+  const fs::path dir = scratch.folder("collapse");
   const fs::path scene = dir / "scene.yaml";
   ASSERT_TRUE(write_scene_variant(kBlock, "effects:\n  - contact", "effects:\n  - contact\n  - gravity", scene));
   std::string text = read_file_text(scene);
@@ -100,7 +98,8 @@ TEST(ValidScenesRun, ATissueThatCannotCarryItsWeightSaysWhy) {
 // `fetouch solve` with an absurd gravity: the solve fails, and standard error says so (it said
 // nothing, exit 1), also under --json where standard output is the report alone.
 TEST(ValidScenesRun, AFailedSolveIsSaidOnStandardError) {
-  const fs::path dir = scratch("gravity");
+  const ScratchDir scratch("fetouch_valid");
+  const fs::path dir = scratch.folder("gravity");
   const fs::path scene = dir / "scene.yaml";
   ASSERT_TRUE(write_scene_variant(kBlock, "effects:\n  - contact", "effects:\n  - contact\n  - gravity: {acceleration_m_per_s2: [0, 0, -1.0e+300]}", scene));
   const CommandResult r = run_command(fetouch("-q solve " + scene.string() + " --json --out " + (dir / "out").string()));

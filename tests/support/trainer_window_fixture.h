@@ -47,6 +47,11 @@ class TrainerWindowTest : public ::testing::Test {
     out_ = std::filesystem::temp_directory_path() / ("fetouch_trainer_window_" + std::to_string(::getpid()));
     std::filesystem::remove_all(out_);
   }
+  // The takes go with a passed test (a failed one's stay for a look).
+  void TearDown() override {
+    std::error_code ignored;
+    if (!out_.empty() && !HasFailure()) std::filesystem::remove_all(out_, ignored);
+  }
   // A window on a shipped scene with the mouse driving its first probe, its takes in out_, shown
   // and made the active window (shortcuts go to it; Xvfb has no window manager).
   std::unique_ptr<app::trainer::TrainerWindow> mouse_window(const std::string& file) {
