@@ -1,12 +1,35 @@
 #include "fem/mpi_session.h"
 
 #include <deal.II/base/mpi.h>
+#include <signal.h>
 #include <unistd.h>
 
+#include <cerrno>
 #include <cstdlib>
 #include <string>
 
 namespace fetouch::fem {
+
+namespace {
+
+// The session directories of fetouch processes that ended without removing theirs (killed, or
+// ended by a signal): fetouch_mpi_PID where no process PID is left. Best effort, quietly.
+void remove_orphaned_directories(const std::filesystem::path& temporary) {
+  std::error_code error;
+  for (std::filesystem::directory_iterator entry(temporary, error), end; !error && entry != end; entry.increment(error)) {
+    const std::string name = entry->path().filename().string();
+    const std::string prefix = "fetouch_mpi_";
+    if (name.compare(0, prefix.size(), prefix) != 0 || name.size() == prefix.size()) continue;
+    const std::string digits = name.substr(prefix.size());
+    if (digits.find_first_not_of("0123456789") != std::string::npos || digits.size() > 9) continue;
+    const pid_t pid = static_cast<pid_t>(std::stol(digits));
+    if (pid <= 0 || ::kill(pid, 0) == 0 || errno != ESRCH) continue;
+    std::error_code ignored;
+    std::filesystem::remove_all(entry->path(), ignored);
+  }
+}
+
+}  // namespace
 
 struct MpiSession::Mpi {
   dealii::Utilities::MPI::MPI_InitFinalize init;
@@ -24,6 +47,7 @@ MpiSession::MpiSession(int& argc, char**& argv) {
     setenv("OMPI_MCA_pml", "ob1", 0);
   }
   if (!launched && !std::getenv("OMPI_MCA_orte_tmpdir_base")) {
+    remove_orphaned_directories(std::filesystem::temp_directory_path());
     directory_ = std::filesystem::temp_directory_path() / ("fetouch_mpi_" + std::to_string(::getpid()));
     std::filesystem::create_directories(directory_);
     setenv("OMPI_MCA_orte_tmpdir_base", directory_.c_str(), 1);

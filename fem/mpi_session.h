@@ -2,7 +2,8 @@
 // builds a PETSc matrix. Open MPI 4 singletons share a session directory under /tmp, and two
 // processes starting at once (ctest -j, several fetouch commands) can break each other's MPI_Init
 // ("orte_session_dir failed"); each session therefore gets its own directory base, removed at the
-// end, unless the caller chose one (OMPI_MCA_orte_tmpdir_base). A singleton also runs without the
+// end, unless the caller chose one (OMPI_MCA_orte_tmpdir_base); those that killed processes left
+// behind are removed when the next session starts. A singleton also runs without the
 // `orted` daemon and the fabric transports, which cost half a second of start-up and serve no peer.
 #pragma once
 

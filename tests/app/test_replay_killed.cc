@@ -1,7 +1,8 @@
 // A real `fetouch replay` session killed with SIGKILL mid-run (issue 6): its recording reopens, its
 // header is whole, and it holds every tick, in order, up to at most one second before the kill.
 // The session writes recording.partial.h5 and renames it to recording.h5 only when complete, so the
-// outputs of an earlier run in the folder are left as they were (issue 17).
+// outputs of an earlier run in the folder are left as they were (issue 17). The MPI session
+// directory the killed process leaves in /tmp is removed by the next fetouch that starts MPI.
 // The real-time clock ties the recording's time to the wall clock (tick k at k ms after the
 // session starts, which the command announces on stderr), so "one second before the kill" is a
 // tick number: the I/O thread flushes every half second.
@@ -81,6 +82,13 @@ TEST(ReplayKilled, RecordingHoldsEverySampleUpToASecondBeforeTheKill) {
   EXPECT_GE(last, killed_after - 1.0 - 0.1);
   EXPECT_LT(last, killed_after + 0.05);  // nothing recorded that had not happened
   EXPECT_FALSE(r.frames.empty());
+
+  // A killed process cannot remove its MPI session directory; the next fetouch that starts MPI does
+  // (this one, or one of a test run beside it).
+  const fs::path orphan = fs::temp_directory_path() / ("fetouch_mpi_" + std::to_string(child));
+  const auto next = run_command(fetouch("check " + scene));
+  EXPECT_EQ(next.exit_code, 0) << next.err;
+  EXPECT_FALSE(fs::exists(orphan)) << orphan << " was left behind";
   fs::remove_all(dir);
 }
 
