@@ -12,11 +12,12 @@ namespace fetouch::fem {
 
 namespace {
 
-// The session directories of fetouch processes that ended without removing theirs (killed, or
-// ended by a signal): fetouch_mpi_PID where no process PID is left. Best effort, quietly.
+// The session directories of fetouch processes that ended without removing theirs (killed by a
+// signal): fetouch_mpi_PID where no process PID is left. Best effort, quietly.
 void remove_orphaned_directories(const std::filesystem::path& temporary) {
   std::error_code error;
-  for (std::filesystem::directory_iterator entry(temporary, error), end; !error && entry != end; entry.increment(error)) {
+  std::filesystem::directory_iterator entry(temporary, error), end;
+  for (; !error && entry != end; entry.increment(error)) {
     const std::string name = entry->path().filename().string();
     const std::string prefix = "fetouch_mpi_";
     if (name.compare(0, prefix.size(), prefix) != 0 || name.size() == prefix.size()) continue;

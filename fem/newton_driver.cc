@@ -179,7 +179,8 @@ StepReport NewtonDriver::newton(double lambda, const NewtonSettings& s, double r
     if (it == s.max_iterations) break;
     // Inexact Newton: far from the solution 1e-3; once the residual has dropped a hundredfold (the
     // quadratic regime), aim the step straight at the convergence tolerance.
-    double eta = std::clamp(norm < 5e-2 * reference ? 0.5 * s.relative_tolerance * reference / norm : 1e-3, 1e-12, 1e-3);
+    const double quadratic = 0.5 * s.relative_tolerance * reference / norm;
+    double eta = std::clamp(norm < 5e-2 * reference ? quadratic : 1e-3, 1e-12, 1e-3);
     // Under a frame's accuracy policy the step need only bring the residual within the policy: the
     // linear residual it may leave is a fifth of the force tolerance (its 2-norm bounds every nodal
     // force) and a fifth of what the handed-over points' error allows, at most a tenth of the

@@ -16,12 +16,13 @@
 //
 // On one rank the factorisation is CHOLMOD's supernodal LL', called directly (cholesky_factor.h).
 // CG with a factorisation is this class's own on every path (CHOLMOD, or PETSc's MUMPS on several
-// ranks), so that a solve takes the same iterations on any number of ranks. Within haptic frames (begin_frame(true)) a solve never pays a
-// factorisation: when CG needs more than refactor_after_iterations, the current K is handed to a
-// worker thread that factorises it while frames go on with the old factorisation, and the new one is
-// taken up at the start of the frame `swap_after_frames` later (waited for there if not ready, so
-// lockstep replays stay bit-reproducible; undeterministic mode, real time, takes it up there if it
-// is ready and otherwise at the first frame after at which it is: background_late()).
+// ranks), so that a solve takes the same iterations on any number of ranks. Within haptic frames
+// (begin_frame(true)) a solve never pays a factorisation: when CG needs more than
+// refactor_after_iterations, the current K is handed to a worker thread that factorises it while
+// frames go on with the old factorisation, and the new one is taken up at the start of the frame
+// `swap_after_frames` later (waited for there if not ready, so lockstep replays stay
+// bit-reproducible; undeterministic mode, real time, takes it up there if it is ready and otherwise
+// at the first frame after at which it is: background_late()).
 // A K that is not positive definite falls back to PETSc's MUMPS LDL'.
 //
 // Or, selectable (and chosen by size in the scene), CG preconditioned by algebraic multigrid
