@@ -380,7 +380,9 @@ TangentSystem::SolveStats TangentSystem::solve(const double* b, double* x, doubl
       method_ = Method::factorisation;
       create_solver(MATSOLVERMUMPS);
       factor(stats);
+      const auto start = std::chrono::steady_clock::now();
       check(PCApply(p.pc, p.b, p.x), "solving with the factorisation");
+      stats.solve_s += since(start);
     }
   }
   gather(x);
@@ -451,17 +453,14 @@ void TangentSystem::apply_rank_one(double* x, int columns, SolveStats& stats) {
 }
 
 void TangentSystem::apply_raw(const double* b, double* x, int columns, SolveStats& stats) {
-  if (direct_cholmod_ && (factor_->valid() && !refactor_ ? true : factor_cholmod(stats))) {
-    const auto start = std::chrono::steady_clock::now();
-    factor_->solve(b, x, columns);
-    stats.solve_s += since(start);
-    return;
-  }
-  Petsc& p = *petsc_;
-  if (!p.factored || refactor_) factor(stats);
+  // A factorisation that is due first (PETSc's LDL' where CHOLMOD finds K not positive definite).
+  if ((!factored() || refactor_) && !factorise(stats)) factorise(stats);
   const auto start = std::chrono::steady_clock::now();
   const int n = static_cast<int>(rows());
-  if (ranks_ == 1 && method_ == Method::factorisation) {
+  if (direct_cholmod_) {
+    factor_->solve(b, x, columns);
+  } else if (ranks_ == 1 && method_ == Method::factorisation) {
+    Petsc& p = *petsc_;
     Mat rhs = nullptr, solution = nullptr;
     check(MatCreateSeqDense(PETSC_COMM_SELF, n, columns, const_cast<double*>(b), &rhs), "wrapping right-hand sides");
     check(MatCreateSeqDense(PETSC_COMM_SELF, n, columns, x, &solution), "wrapping solutions");

@@ -146,6 +146,7 @@ class TangentSystem {
   // CG preconditioned by the current factorisation, CHOLMOD's or PETSc's (tangent_system_cholmod.cc).
   SolveStats solve_factorised(const double* b, double* x, double tolerance, bool zero_guess);
   bool factored() const;                            // a factorisation to precondition with
+  bool factorise(SolveStats& stats);               // K now (false: CHOLMOD failed, PETSc's LDL' next)
   void apply_factor(const double* b, double* x);  // P^-1 b, one column, untimed
   bool factor_cholmod(SolveStats& stats);  // false: not positive definite (PETSc takes over)
   void set_up_cholmod();

@@ -39,7 +39,6 @@ void TangentSystem::set_up_cholmod() {
   primed_ = false;
   factor_ = std::make_unique<CholeskyFactor>(n, row_start_.data(), columns_.data());
   worker_ = std::make_unique<Worker>(n, row_start_.data(), columns_.data());
-  for (auto* v : {&r_, &z_, &p_, &q_}) v->assign(n, 0.0);
 }
 
 // ---- one rank: CHOLMOD directly, background factorisations ---------------------------------------
@@ -169,6 +168,14 @@ double TangentSystem::begin_frame(bool frame) {
   return waited;
 }
 
+// K factorised now, by CHOLMOD or PETSc. False where CHOLMOD found K not positive definite: PETSc's
+// LDL' has taken over and factorises at the next call.
+bool TangentSystem::factorise(SolveStats& stats) {
+  if (direct_cholmod_) return factor_cholmod(stats);
+  factor(stats);
+  return true;
+}
+
 // Preconditioned CG on the current K (+ c g g') with the factorisation of an earlier one (+ c g g',
 // by Sherman-Morrison); a fresh factorisation solves directly. One loop for CHOLMOD on one rank and
 // for PETSc's factorisations (MUMPS on several ranks, or LDL' where K is not positive definite): every
@@ -179,13 +186,6 @@ TangentSystem::SolveStats TangentSystem::solve_factorised(const double* b, doubl
   const int n = static_cast<int>(rows());
   for (auto* v : {&r_, &z_, &p_, &q_}) v->resize(n);
   if (zero_guess) std::fill(x, x + n, 0.0);
-  // A new factorisation of the current K; false where CHOLMOD found K not positive definite (PETSc's
-  // LDL' takes over: solve() again).
-  const auto refactor_now = [&] {
-    if (direct_cholmod_) return factor_cholmod(stats);
-    factor(stats);
-    return true;
-  };
   const auto precondition = [&](const double* in, double* out) {
     apply_factor(in, out);
     apply_rank_one(out, 1, stats);
@@ -204,7 +204,7 @@ TangentSystem::SolveStats TangentSystem::solve_factorised(const double* b, doubl
     stats.rank_one = rank_one_c_ != 0;
   };
   if (!factored() || refactor_) {
-    if (!refactor_now()) return solve(b, x, tolerance, false);
+    if (!factorise(stats)) return solve(b, x, tolerance, false);  // PETSc's LDL' from here
     direct();
     return stats;
   }
@@ -218,7 +218,8 @@ TangentSystem::SolveStats TangentSystem::solve_factorised(const double* b, doubl
   for (int i = 0; i < n; ++i) r_[i] = b[i] - q_[i];
   const double target = tolerance * b_norm;
   const int limit = in_frame_ ? max_background_cg_iterations : max_cg_iterations;
-  bool converged = std::sqrt(dot(r_, r_)) <= target;
+  double residual = std::sqrt(dot(r_, r_));
+  bool converged = residual <= target;
   int iterations = 0;
   double rz = 0;
   for (; !converged && iterations < limit; ++iterations) {
@@ -232,7 +233,8 @@ TangentSystem::SolveStats TangentSystem::solve_factorised(const double* b, doubl
     const double alpha = rz / dot(p_, q_);
     if (!std::isfinite(alpha)) break;
     for (int i = 0; i < n; ++i) x[i] += alpha * p_[i], r_[i] -= alpha * q_[i];
-    converged = std::sqrt(dot(r_, r_)) <= target;
+    residual = std::sqrt(dot(r_, r_));
+    converged = residual <= target;
   }
   stats.iterations = iterations;
   stats.solve_s += since(start);
@@ -244,7 +246,7 @@ TangentSystem::SolveStats TangentSystem::solve_factorised(const double* b, doubl
     // from its first count would let it age without bound.)
     // A looser tolerance takes fewer iterations on the same drift, so their mean rate counts too
     // (refactor_after_iterations at a tolerance of 1e-3 is a rate of 1e-3^(1/refactor_after_iterations)).
-    const double rate = iterations > 0 ? std::pow(std::sqrt(dot(r_, r_)) / b_norm, 1.0 / iterations) : 0.0;
+    const double rate = iterations > 0 ? std::pow(residual / b_norm, 1.0 / iterations) : 0.0;
     if (iterations > refactor_after_iterations || rate > std::pow(1e-3, 1.0 / refactor_after_iterations)) {
       if (in_frame_) request_background();
       else refactor_ = true;
@@ -253,7 +255,7 @@ TangentSystem::SolveStats TangentSystem::solve_factorised(const double* b, doubl
   }
   // CG on the old factorisation did not get there: factorise K now and solve directly.
   std::fill(x, x + n, 0.0);
-  if (!refactor_now()) return solve(b, x, tolerance, true);
+  if (!factorise(stats)) return solve(b, x, tolerance, true);
   direct();
   return stats;
 }

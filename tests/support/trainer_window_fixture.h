@@ -4,7 +4,6 @@
 #pragma once
 
 #include <gtest/gtest.h>
-#include <unistd.h>
 #include <QApplication>
 #include <QSurfaceFormat>
 #include <QVTKOpenGLNativeWidget.h>
@@ -17,6 +16,7 @@
 
 #include "app/scene_mesh.h"
 #include "app/trainer/trainer_window.h"
+#include "tests/support/scratch_dir.h"
 
 namespace fetouch::testing {
 
@@ -44,13 +44,8 @@ class TrainerWindowTest : public ::testing::Test {
   void SetUp() override {
     if (!std::getenv("DISPLAY")) GTEST_SKIP() << "no display: run under xvfb-run -a";
     application();
-    out_ = std::filesystem::temp_directory_path() / ("fetouch_trainer_window_" + std::to_string(::getpid()));
-    std::filesystem::remove_all(out_);
-  }
-  // The takes go with a passed test (a failed one's stay for a look).
-  void TearDown() override {
-    std::error_code ignored;
-    if (!out_.empty() && !HasFailure()) std::filesystem::remove_all(out_, ignored);
+    scratch_.emplace("fetouch_trainer_window");  // the takes go with a passed test
+    out_ = scratch_->path();
   }
   // A window on a shipped scene with the mouse driving its first probe, its takes in out_, shown
   // and made the active window (shortcuts go to it; Xvfb has no window manager).
@@ -64,6 +59,7 @@ class TrainerWindowTest : public ::testing::Test {
     QApplication::setActiveWindow(w.get());
     return w;
   }
+  std::optional<ScratchDir> scratch_;
   std::filesystem::path out_;
 };
 
