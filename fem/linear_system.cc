@@ -58,6 +58,7 @@ void LinearSystem::set_up(const std::vector<Support>& supports, TangentSystem::M
                        space.node_block);
   y_current_ = false;
   scatter_.clear();
+  support_values_.clear();
   ++pattern_revision_;
 }
 
@@ -81,13 +82,21 @@ const int* LinearSystem::cell_scatter(unsigned int k) const {
   return &scatter_[std::size_t(k) * n * n];
 }
 
+// g(x) at the supports' dofs is interpolated once per set_up (deal.II's interpolation visits every
+// boundary face: 5.5 ms a frame on the anatomy at 3.6 mm) and scaled by the factor at each call,
+// the same product ScaledField forms.
 void LinearSystem::apply_supports(const std::vector<Support>& supports, double factor, Vector<double>& u) const {
-  for (const Support& s : supports) {
-    std::map<types::global_dof_index, double> values;
-    VectorTools::interpolate_boundary_values(*d_.mapping, d_.dof, s.boundary, ScaledField(s.field, factor), values,
-                                             mask(s.components));
-    for (const auto& [index, value] : values) u[index] = value;
+  if (support_values_.size() != supports.size()) {
+    support_values_.assign(supports.size(), {});
+    for (std::size_t k = 0; k < supports.size(); ++k) {
+      std::map<types::global_dof_index, double> values;
+      VectorTools::interpolate_boundary_values(*d_.mapping, d_.dof, supports[k].boundary, ScaledField(supports[k].field, 1.0),
+                                               values, mask(supports[k].components));
+      support_values_[k].assign(values.begin(), values.end());
+    }
   }
+  for (const auto& values : support_values_)
+    for (const auto& [index, value] : values) u[index] = factor * value;
 }
 
 void LinearSystem::set_rank_one(double c, const Vector<double>* g) {

@@ -48,7 +48,8 @@ class LinearSystem {
   // Constraints and sparsity for these supports (throws std::invalid_argument for a boundary id no
   // face has); the tangent's values are then stale.
   void set_up(const std::vector<Support>& supports, TangentSystem::Method method);
-  // u := factor g(x) on the supports' components.
+  // u := factor g(x) on the supports' components: the supports given to set_up (their g(x) is kept
+  // from the first call).
   void apply_supports(const std::vector<Support>& supports, double factor, dealii::Vector<double>& u) const;
 
   const dealii::AffineConstraints<double>& constraints() const { return constraints_; }
@@ -96,6 +97,7 @@ class LinearSystem {
   dealii::AffineConstraints<double> constraints_;
   std::vector<bool> constrained_;
   mutable std::vector<int> scatter_;  // built on first use
+  mutable std::vector<std::vector<std::pair<dealii::types::global_dof_index, double>>> support_values_;  // g(x), per support
   int pattern_revision_ = 0;
   TangentSystem tangent_;
   double rank_one_c_ = 0;
