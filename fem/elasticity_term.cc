@@ -62,8 +62,15 @@ bool ElasticityTerm::assemble_fixed(const std::vector<unsigned int>& cells, cons
   std::array<int, N> comp, base;  // cell dof i is component comp[i] of scalar base function base[i]
   for (int i = 0; i < N; ++i) comp[i] = static_cast<int>(c.component[i]), base[i] = static_cast<int>(c.base[i]);
   std::array<double, N> u_local, cell_internal, volume_gradient;
-  std::vector<double> cell_matrix(tangent ? std::size_t(N) * N : 0);  // [i][j], upper triangle until mirrored
+  std::array<double, N * N> cell_matrix;  // [i][j]: the blocks a <= b of base functions until mirrored
   double ag[NB][3][3][3];  // jxw A[ci][J][cj][.] . grad phi_b, so that K_ij = grad phi_i . ag[b_j][c_i][c_j]
+  // Cell dof i is component i % 3 of base function i / 3 (deal.II's FESystem of three equal scalar
+  // elements, checked): the tangent is then summed by 3 x 3 blocks with fixed loop bounds, which the
+  // compiler unrolls. (Reading each dof's component and base function in the innermost loop took
+  // most of the assembly's time.)
+  bool node_major = true;
+  for (int i = 0; i < N; ++i) node_major = node_major && comp[i] == i % 3 && base[i] == i / 3;
+  if (!node_major) throw std::logic_error("the elasticity kernel expects the dofs of a cell node by node");
   std::vector<Tensor2> F_at(nq);
   Tensor2 P;
   Tensor4 A;
@@ -80,7 +87,7 @@ bool ElasticityTerm::assemble_fixed(const std::vector<unsigned int>& cells, cons
       for (int a = 0; a < 3; ++a) F[a][a] += 1;
     }
     cell_internal.fill(0);
-    if (tangent) std::fill(cell_matrix.begin(), cell_matrix.end(), 0.0);
+    if (tangent) cell_matrix.fill(0.0);
     // Mean dilatation: U(J) becomes U(theta) of the cell's volume ratio theta = v / V, its pressure
     // p = U'(theta) constant over the cell. One point (P1): theta = J, nothing changes.
     const bool dilatation = mean_dilatation_ && nq > 1;
@@ -133,23 +140,29 @@ bool ElasticityTerm::assemble_fixed(const std::vector<unsigned int>& cells, cons
             for (int cj = 0; cj < 3; ++cj)
               ag[b][ci][cj][J] = jxw * (A[ci][J][cj][0] * g[0] + A[ci][J][cj][1] * g[1] + A[ci][J][cj][2] * g[2]);
       }
-      for (int i = 0; i < N; ++i) {
-        const Tensor<1, 3>& g = grad[base[i]];
-        double* row = &cell_matrix[std::size_t(i) * N];
-        for (int j = i; j < N; ++j) {
-          const double* x = ag[base[j]][comp[i]][comp[j]];
-          row[j] += g[0] * x[0] + g[1] * x[1] + g[2] * x[2];
+      for (int a = 0; a < NB; ++a) {
+        const double g0 = grad[a][0], g1 = grad[a][1], g2 = grad[a][2];
+        for (int ci = 0; ci < 3; ++ci) {
+          double* row = &cell_matrix[std::size_t(3 * a + ci) * N];
+          for (int b = a; b < NB; ++b)
+            for (int cj = 0; cj < 3; ++cj) {
+              const double* x = ag[b][ci][cj];
+              row[3 * b + cj] += g0 * x[0] + g1 * x[1] + g2 * x[2];
+            }
         }
       }
     }
     if (tangent) {
+      for (int a = 1; a < NB; ++a)  // the blocks below the diagonal, K_(a,ci)(b,cj) = K_(b,cj)(a,ci)
+        for (int b = 0; b < a; ++b)
+          for (int ci = 0; ci < 3; ++ci)
+            for (int cj = 0; cj < 3; ++cj)
+              cell_matrix[std::size_t(3 * a + ci) * N + 3 * b + cj] = cell_matrix[std::size_t(3 * b + cj) * N + 3 * a + ci];
       if (dilatation) {  // U''(theta)/V (dv/du)(dv/du)'
         const double scale = pressure_stiffness / reference_volume;
         for (int i = 0; i < N; ++i)
-          for (int j = i; j < N; ++j) cell_matrix[std::size_t(i) * N + j] += scale * volume_gradient[i] * volume_gradient[j];
+          for (int j = 0; j < N; ++j) cell_matrix[std::size_t(i) * N + j] += scale * volume_gradient[i] * volume_gradient[j];
       }
-      for (int i = 1; i < N; ++i)
-        for (int j = 0; j < i; ++j) cell_matrix[std::size_t(i) * N + j] = cell_matrix[std::size_t(j) * N + i];
     }
     // Homogeneous constraints: constrained rows and columns are dropped (finish() puts their diagonal).
     const int* where = tangent ? system.cell_scatter(k) : nullptr;
