@@ -7,7 +7,9 @@
 // analysis are done at construction; factorise() is the numeric phase only.
 #pragma once
 
+#include <cstddef>
 #include <memory>
+#include <vector>
 
 namespace fetouch::fem {
 
@@ -24,11 +26,21 @@ class CholeskyFactor {
   bool valid() const { return valid_; }
   // X = K^-1 B for `columns` right-hand sides, column-major (rows x columns).
   void solve(const double* b, double* x, int columns = 1);
+  // The same with the factor's entries rounded to single precision (kept beside the double ones
+  // when single_copy is set before factorise): half the bytes to read, for a preconditioner.
+  void solve_single(const double* b, double* x, int columns = 1);
+  bool single_copy = false;
+  // Entries of L as the symbolic analysis laid it out (supernodal: the dense blocks' entries).
+  std::size_t factor_entries() const;
+  bool has_single() const { return valid_ && !single_.empty(); }
 
  private:
   struct Cholmod;
   std::unique_ptr<Cholmod> c_;
   bool valid_ = false;
+  std::vector<float> single_;
+  std::vector<float> single_work_;
+  std::size_t widest_ = 0;  // rows of the largest supernode
 };
 
 }  // namespace fetouch::fem

@@ -11,9 +11,11 @@
 #include <chrono>
 #include <cmath>
 #include <condition_variable>
+#include <cstdlib>
 #include <mutex>
 #include <numeric>
 #include <stdexcept>
+#include <string>
 #include <thread>
 
 #include "fem/background_factoriser.h"
@@ -39,6 +41,11 @@ void TangentSystem::set_up_cholmod() {
   primed_ = false;
   factor_ = std::make_unique<CholeskyFactor>(n, row_start_.data(), columns_.data());
   worker_ = std::make_unique<Worker>(n, row_start_.data(), columns_.data());
+  // FETOUCH_PRECONDITIONER=double: CG preconditioned in double precision, as before (to measure).
+  const char* precision = std::getenv("FETOUCH_PRECONDITIONER");
+  const bool single = single_precision_preconditioner && factor_->factor_entries() >= single_precision_min_entries &&
+                      !(precision && std::string(precision) == "double");
+  factor_->single_copy = single, worker_->factor->single_copy = single;
 }
 
 // ---- one rank: CHOLMOD directly, background factorisations ---------------------------------------
@@ -199,6 +206,7 @@ TangentSystem::SolveStats TangentSystem::solve_factorised(const double* b, doubl
   };
   const auto direct = [&] {
     const auto start = std::chrono::steady_clock::now();
+    const InDouble in_double(exact_, true);
     precondition(b, x);
     stats.solve_s += since(start);
     stats.rank_one = rank_one_c_ != 0;
@@ -209,6 +217,7 @@ TangentSystem::SolveStats TangentSystem::solve_factorised(const double* b, doubl
     return stats;
   }
   if (rank_one_c_ != 0) factorised_g(stats);  // before the clock: timed by itself
+  const InDouble in_double(exact_, tolerance < kSinglePrecisionTolerance);
   const auto start = std::chrono::steady_clock::now();
   const auto dot = [n](const std::vector<double>& a, const std::vector<double>& c) {
     return std::inner_product(a.begin(), a.begin() + n, c.begin(), 0.0);

@@ -3,8 +3,10 @@
 // without refactoring, a matrix that is not positive definite falls back to LDL' and is still solved.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdio>
 #include <thread>
 #include <vector>
 
@@ -190,6 +192,101 @@ TEST(TangentSystem, IndefiniteMatrixFallsBackToLdl) {
   std::vector<double> b(n, 1.0), x(n);
   k.solve(b.data(), x.data(), 1e-10, true);
   EXPECT_LT(relative_residual(k, b, x), 1e-10);
+}
+
+// The 7-point Laplacian on an m^3 grid with a coefficient per cell drawn over three decades (a
+// soft sac around a stiff head has such contrasts), Dirichlet outside: SPD and poorly conditioned.
+// `drift` scales the coefficients by 1 + drift * (a smooth field), as a later state's tangent.
+void variable_laplacian(TangentSystem& k, int m, double drift) {
+  const int n = m * m * m;
+  const auto at = [m](int x, int y, int z) { return (z * m + y) * m + x; };
+  const auto coefficient = [&](int x, int y, int z) {  // deterministic, 1e-1.5 .. 1e1.5
+    const double u = std::sin(12.9898 * x + 78.233 * y + 37.719 * z) * 43758.5453;
+    return std::pow(10.0, 3 * (u - std::floor(u)) - 1.5) * (1 + drift * std::cos(0.3 * x + 0.2 * z));
+  };
+  std::vector<int> start{0}, columns;
+  for (int z = 0; z < m; ++z)
+    for (int y = 0; y < m; ++y)
+      for (int x = 0; x < m; ++x) {
+        std::vector<int> row{at(x, y, z)};
+        if (x > 0) row.push_back(at(x - 1, y, z));
+        if (x + 1 < m) row.push_back(at(x + 1, y, z));
+        if (y > 0) row.push_back(at(x, y - 1, z));
+        if (y + 1 < m) row.push_back(at(x, y + 1, z));
+        if (z > 0) row.push_back(at(x, y, z - 1));
+        if (z + 1 < m) row.push_back(at(x, y, z + 1));
+        std::sort(row.begin(), row.end());
+        columns.insert(columns.end(), row.begin(), row.end());
+        start.push_back(static_cast<int>(columns.size()));
+      }
+  if (k.rows() != static_cast<std::size_t>(n)) k.set_pattern(start, columns, TangentSystem::Method::factorisation, 0, n);
+  k.zero();
+  for (int z = 0; z < m; ++z)
+    for (int y = 0; y < m; ++y)
+      for (int x = 0; x < m; ++x) {
+        const int i = at(x, y, z);
+        const double c = coefficient(x, y, z);
+        const int neighbours[6][3] = {{x - 1, y, z}, {x + 1, y, z}, {x, y - 1, z}, {x, y + 1, z}, {x, y, z - 1}, {x, y, z + 1}};
+        for (const auto& q : neighbours) {
+          const bool inside = q[0] >= 0 && q[0] < m && q[1] >= 0 && q[1] < m && q[2] >= 0 && q[2] < m;
+          const double edge = inside ? std::sqrt(c * coefficient(q[0], q[1], q[2])) : c;
+          k.add(i, i, edge);
+          if (inside) k.add(i, at(q[0], q[1], q[2]), -edge);
+        }
+      }
+  k.finish(std::vector<bool>(n, false));
+}
+
+// CG on a stale factorisation applies its single-precision copy to the tolerances a frame asks
+// for, in about the iterations the double factor takes; tighter solves and a just-made
+// factorisation (the solution itself) apply the double factor, to double accuracy. The copy is the
+// same factor: its answers are the double one's to single precision, column by column or in blocks.
+TEST(TangentSystem, ASinglePrecisionCopyPreconditionsFramesAndTightSolvesStayDouble) {
+  const int m = 14, n = m * m * m;
+  std::vector<double> b(n);
+  for (int i = 0; i < n; ++i) b[i] = std::cos(0.37 * i) + 0.5;
+  std::vector<double> reference(3 * n);
+  int loose[2] = {0, 0}, tight[2] = {0, 0};
+  for (const bool single : {false, true}) {
+    SCOPED_TRACE(single ? "single" : "double");
+    TangentSystem k;
+    k.single_precision_preconditioner = single;
+    k.single_precision_min_entries = 0;  // this factor is small
+    variable_laplacian(k, m, 0.0);
+    std::vector<double> x(n);
+    const TangentSystem::SolveStats first = k.solve(b.data(), x.data(), 1e-12, true);
+    EXPECT_TRUE(first.refactored);
+    EXPECT_EQ(k.keeps_single_precision(), single);
+    EXPECT_LT(relative_residual(k, b, x), 1e-12) << "a fresh factorisation is applied in double";
+    // The factor applied to three columns in a block and one at a time.
+    std::vector<double> block(3 * n), together(3 * n), alone(3 * n);
+    for (int i = 0; i < 3 * n; ++i) block[i] = std::sin(0.11 * i);
+    k.apply_factorisation(block.data(), together.data(), 3);
+    for (int c = 0; c < 3; ++c) k.apply_factorisation(block.data() + c * n, alone.data() + c * n, 1);
+    double blocks = 0, size = 0;
+    for (int i = 0; i < 3 * n; ++i) blocks = std::max(blocks, std::abs(together[i] - alone[i])), size = std::max(size, std::abs(alone[i]));
+    EXPECT_LT(blocks, 1e-5 * size);
+    if (!single) reference = alone;
+    double from_double = 0;
+    for (int i = 0; i < 3 * n; ++i) from_double = std::max(from_double, std::abs(alone[i] - reference[i]));
+    EXPECT_LT(from_double, 1e-4 * size);
+    if (single) {
+      EXPECT_GT(from_double, 0.0) << "the copy was not used";
+    }
+    // 2 % drift: CG on the old factorisation, to a frame's tolerance and to a static solve's.
+    variable_laplacian(k, m, 0.02);
+    for (const double tolerance : {1e-4, 1e-12}) {
+      std::fill(x.begin(), x.end(), 0.0);
+      const TangentSystem::SolveStats drifted = k.solve(b.data(), x.data(), tolerance, true);
+      EXPECT_FALSE(drifted.refactored);
+      EXPECT_LT(relative_residual(k, b, x), tolerance);
+      (tolerance > 1e-6 ? loose : tight)[single] = drifted.iterations;
+    }
+  }
+  std::printf("CG iterations after 2 %% drift, double factor / single copy: %d / %d to 1e-4, %d / %d to 1e-12\n",
+              loose[0], loose[1], tight[0], tight[1]);
+  EXPECT_LE(loose[1], loose[0] + 1);
+  EXPECT_EQ(tight[1], tight[0]);
 }
 
 }  // namespace
