@@ -14,7 +14,8 @@ namespace {
 // The BLAS's single-precision routines, from the BLAS CHOLMOD itself is linked with (OpenBLAS, by
 // Debian's alternative), looked up at run time: none found, no single-precision copy is kept.
 struct SingleBlas {
-  using Trsv = void (*)(const char*, const char*, const char*, const int*, const float*, const int*, float*, const int*);
+  using Trsv = void (*)(const char*, const char*, const char*, const int*, const float*, const int*, float*,
+                        const int*);
   using Gemv = void (*)(const char*, const int*, const int*, const float*, const float*, const int*, const float*,
                         const int*, const float*, float*, const int*);
   using Trsm = void (*)(const char*, const char*, const char*, const char*, const int*, const int*, const float*,
@@ -136,7 +137,8 @@ void CholeskyFactor::solve_single(const double* b, double* x, int columns) {
     if (below > 0) {
       for (std::size_t k = 0; k < m; ++k)
         for (int i = 0; i < below; ++i) t[k * below + i] = y[k * n + index[i]];
-      if (columns == 1) blas.gemv("T", &below, &nscol, &minus_one, block + nscol, &nsrow, t, &step, &one, y + k1, &step);
+      if (columns == 1)
+        blas.gemv("T", &below, &nscol, &minus_one, block + nscol, &nsrow, t, &step, &one, y + k1, &step);
       else
         blas.gemm("T", "N", &nscol, &columns, &below, &minus_one, block + nscol, &nsrow, t, &below, &one, y + k1, &n);
     }

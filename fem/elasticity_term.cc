@@ -157,11 +157,13 @@ bool ElasticityTerm::assemble_fixed(const std::vector<unsigned int>& cells, cons
         for (int b = 0; b < a; ++b)
           for (int ci = 0; ci < 3; ++ci)
             for (int cj = 0; cj < 3; ++cj)
-              cell_matrix[std::size_t(3 * a + ci) * N + 3 * b + cj] = cell_matrix[std::size_t(3 * b + cj) * N + 3 * a + ci];
+              cell_matrix[std::size_t(3 * a + ci) * N + 3 * b + cj] =
+                  cell_matrix[std::size_t(3 * b + cj) * N + 3 * a + ci];
       if (dilatation) {  // U''(theta)/V (dv/du)(dv/du)'
         const double scale = pressure_stiffness / reference_volume;
         for (int i = 0; i < N; ++i)
-          for (int j = 0; j < N; ++j) cell_matrix[std::size_t(i) * N + j] += scale * volume_gradient[i] * volume_gradient[j];
+          for (int j = 0; j < N; ++j)
+            cell_matrix[std::size_t(i) * N + j] += scale * volume_gradient[i] * volume_gradient[j];
       }
     }
     // Homogeneous constraints: constrained rows and columns are dropped (finish() puts their diagonal).

@@ -90,8 +90,9 @@ void LinearSystem::apply_supports(const std::vector<Support>& supports, double f
     support_values_.assign(supports.size(), {});
     for (std::size_t k = 0; k < supports.size(); ++k) {
       std::map<types::global_dof_index, double> values;
-      VectorTools::interpolate_boundary_values(*d_.mapping, d_.dof, supports[k].boundary, ScaledField(supports[k].field, 1.0),
-                                               values, mask(supports[k].components));
+      const Support& support = supports[k];
+      VectorTools::interpolate_boundary_values(*d_.mapping, d_.dof, support.boundary, ScaledField(support.field, 1.0),
+                                               values, mask(support.components));
       support_values_[k].assign(values.begin(), values.end());
     }
   }

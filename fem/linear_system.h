@@ -97,7 +97,8 @@ class LinearSystem {
   dealii::AffineConstraints<double> constraints_;
   std::vector<bool> constrained_;
   mutable std::vector<int> scatter_;  // built on first use
-  mutable std::vector<std::vector<std::pair<dealii::types::global_dof_index, double>>> support_values_;  // g(x), per support
+  // g(x) at each support's dofs, kept from the first apply_supports after set_up.
+  mutable std::vector<std::vector<std::pair<dealii::types::global_dof_index, double>>> support_values_;
   int pattern_revision_ = 0;
   TangentSystem tangent_;
   double rank_one_c_ = 0;

@@ -396,7 +396,10 @@ bool TangentSystem::factored() const { return direct_cholmod_ ? factor_ && facto
 // P^-1 b for one column, P the current factorisation (CHOLMOD's, or PETSc's gathered onto every
 // rank), without the rank-one part and untimed.
 void TangentSystem::apply_factor(const double* b, double* x) {
-  if (direct_cholmod_) return exact_ || !factor_->has_single() ? factor_->solve(b, x, 1) : factor_->solve_single(b, x, 1);
+  if (direct_cholmod_) {
+    if (in_double_ || !factor_->has_single()) return factor_->solve(b, x, 1);
+    return factor_->solve_single(b, x, 1);
+  }
   Petsc& p = *petsc_;
   check(VecPlaceArray(p.b, b + owned_begin_), "wrapping a right-hand side");
   check(VecPlaceArray(p.x, x + owned_begin_), "wrapping a solution");
@@ -431,10 +434,10 @@ TangentSystem::SolveStats TangentSystem::apply_factorisation_to_rank_one_g(doubl
 const std::vector<double>& TangentSystem::factorised_g(SolveStats& stats) {
   // In the precision of the applications it goes with: one in double needs P^-1 g in double
   // (the rank-one correction would otherwise carry the single copy's rounding into an exact solve).
-  if (!pg_current_ || pg_factorisations_ != factorisations_ || (exact_ && !pg_double_)) {
+  if (!pg_current_ || pg_factorisations_ != factorisations_ || (in_double_ && !pg_double_)) {
     pg_.assign(rows(), 0.0);
     apply_raw(rank_one_g_, pg_.data(), 1, stats);
-    pg_double_ = exact_ || !keeps_single_precision();
+    pg_double_ = in_double_ || !keeps_single_precision();
     pg_current_ = true;
     pg_factorisations_ = factorisations_;
   }
@@ -463,7 +466,7 @@ void TangentSystem::apply_raw(const double* b, double* x, int columns, SolveStat
   const auto start = std::chrono::steady_clock::now();
   const int n = static_cast<int>(rows());
   if (direct_cholmod_) {
-    if (exact_ || !factor_->has_single()) factor_->solve(b, x, columns);
+    if (in_double_ || !factor_->has_single()) factor_->solve(b, x, columns);
     else factor_->solve_single(b, x, columns);
   } else if (ranks_ == 1 && method_ == Method::factorisation) {
     Petsc& p = *petsc_;

@@ -122,8 +122,8 @@ class TangentSystem {
   // used as the solution itself (just made) is applied in double. Only for a factor of at least
   // single_precision_min_entries entries: a smaller one stays in the cache, where halving its bytes
   // gains little and its rounding, about the condition number times 6e-8, would count as drift
-  // (the fetal phantom's tangent: 1.45 M entries, its presses' factor applications 1.7 times
-  // faster and no more CG iterations). Read when the pattern is set.
+  // (the fetal phantom's factor: 1.67 M entries as the supernodes lay them out, its presses' factor
+  // applications 1.7 times faster and no more CG iterations). Read when the pattern is set.
   bool single_precision_preconditioner = true;
   std::size_t single_precision_min_entries = 1'000'000;
   // CG to a tighter relative residual than this applies the double factor (a frame's steps, solved to
@@ -198,7 +198,7 @@ class TangentSystem {
   // The factorisation is applied in double precision (its single copy otherwise, where kept): as
   // the solution itself, for P^-1 g of the rank-one part, and in CG to tolerances the single
   // copy's rounding would reach. Set within a scope by InDouble.
-  bool exact_ = false;
+  bool in_double_ = false;
   struct InDouble {
     bool& flag;
     const bool saved;

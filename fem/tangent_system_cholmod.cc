@@ -206,7 +206,7 @@ TangentSystem::SolveStats TangentSystem::solve_factorised(const double* b, doubl
   };
   const auto direct = [&] {
     const auto start = std::chrono::steady_clock::now();
-    const InDouble in_double(exact_, true);
+    const InDouble in_double(in_double_, true);
     precondition(b, x);
     stats.solve_s += since(start);
     stats.rank_one = rank_one_c_ != 0;
@@ -216,8 +216,8 @@ TangentSystem::SolveStats TangentSystem::solve_factorised(const double* b, doubl
     direct();
     return stats;
   }
+  const InDouble in_double(in_double_, tolerance < kSinglePrecisionTolerance);
   if (rank_one_c_ != 0) factorised_g(stats);  // before the clock: timed by itself
-  const InDouble in_double(exact_, tolerance < kSinglePrecisionTolerance);
   const auto start = std::chrono::steady_clock::now();
   const auto dot = [n](const std::vector<double>& a, const std::vector<double>& c) {
     return std::inner_product(a.begin(), a.begin() + n, c.begin(), 0.0);

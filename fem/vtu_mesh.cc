@@ -83,7 +83,8 @@ void order_along_curve(const std::vector<dealii::Point<3>>& vertices, std::vecto
   std::vector<std::pair<std::uint64_t, std::size_t>> key(cells.size());
   for (std::size_t k = 0; k < cells.size(); ++k) {
     dealii::Point<3> centre;
-    for (const unsigned int v : cells[k].vertices) centre += vertices[v] / static_cast<double>(cells[k].vertices.size());
+    for (const unsigned int v : cells[k].vertices)
+      centre += vertices[v] / static_cast<double>(cells[k].vertices.size());
     std::uint64_t place[3], morton = 0;
     for (int d = 0; d < 3; ++d) {
       const double t = high[d] > low[d] ? (centre[d] - low[d]) / (high[d] - low[d]) : 0.0;

@@ -219,14 +219,16 @@ void variable_laplacian(TangentSystem& k, int m, double drift) {
         columns.insert(columns.end(), row.begin(), row.end());
         start.push_back(static_cast<int>(columns.size()));
       }
-  if (k.rows() != static_cast<std::size_t>(n)) k.set_pattern(start, columns, TangentSystem::Method::factorisation, 0, n);
+  if (k.rows() != static_cast<std::size_t>(n))
+    k.set_pattern(start, columns, TangentSystem::Method::factorisation, 0, n);
   k.zero();
   for (int z = 0; z < m; ++z)
     for (int y = 0; y < m; ++y)
       for (int x = 0; x < m; ++x) {
         const int i = at(x, y, z);
         const double c = coefficient(x, y, z);
-        const int neighbours[6][3] = {{x - 1, y, z}, {x + 1, y, z}, {x, y - 1, z}, {x, y + 1, z}, {x, y, z - 1}, {x, y, z + 1}};
+        const int neighbours[6][3] = {{x - 1, y, z}, {x + 1, y, z}, {x, y - 1, z},
+                                      {x, y + 1, z}, {x, y, z - 1}, {x, y, z + 1}};
         for (const auto& q : neighbours) {
           const bool inside = q[0] >= 0 && q[0] < m && q[1] >= 0 && q[1] < m && q[2] >= 0 && q[2] < m;
           const double edge = inside ? std::sqrt(c * coefficient(q[0], q[1], q[2])) : c;
@@ -264,7 +266,8 @@ TEST(TangentSystem, ASinglePrecisionCopyPreconditionsFramesAndTightSolvesStayDou
     k.apply_factorisation(block.data(), together.data(), 3);
     for (int c = 0; c < 3; ++c) k.apply_factorisation(block.data() + c * n, alone.data() + c * n, 1);
     double blocks = 0, size = 0;
-    for (int i = 0; i < 3 * n; ++i) blocks = std::max(blocks, std::abs(together[i] - alone[i])), size = std::max(size, std::abs(alone[i]));
+    for (int i = 0; i < 3 * n; ++i)
+      blocks = std::max(blocks, std::abs(together[i] - alone[i])), size = std::max(size, std::abs(alone[i]));
     EXPECT_LT(blocks, 1e-5 * size);
     if (!single) reference = alone;
     double from_double = 0;
