@@ -389,6 +389,12 @@ TangentSystem::SolveStats TangentSystem::solve(const double* b, double* x, doubl
   return stats;
 }
 
+// CHOLMOD's factor, or its single-precision copy where one is kept and double is not asked for.
+void TangentSystem::apply_cholmod(const double* b, double* x, int columns) {
+  if (in_double_ || !factor_->has_single()) factor_->solve(b, x, columns);
+  else factor_->solve_single(b, x, columns);
+}
+
 bool TangentSystem::keeps_single_precision() const { return direct_cholmod_ && factor_ && factor_->has_single(); }
 
 bool TangentSystem::factored() const { return direct_cholmod_ ? factor_ && factor_->valid() : petsc_->factored; }
@@ -396,10 +402,7 @@ bool TangentSystem::factored() const { return direct_cholmod_ ? factor_ && facto
 // P^-1 b for one column, P the current factorisation (CHOLMOD's, or PETSc's gathered onto every
 // rank), without the rank-one part and untimed.
 void TangentSystem::apply_factor(const double* b, double* x) {
-  if (direct_cholmod_) {
-    if (in_double_ || !factor_->has_single()) return factor_->solve(b, x, 1);
-    return factor_->solve_single(b, x, 1);
-  }
+  if (direct_cholmod_) return apply_cholmod(b, x, 1);
   Petsc& p = *petsc_;
   check(VecPlaceArray(p.b, b + owned_begin_), "wrapping a right-hand side");
   check(VecPlaceArray(p.x, x + owned_begin_), "wrapping a solution");
@@ -466,8 +469,7 @@ void TangentSystem::apply_raw(const double* b, double* x, int columns, SolveStat
   const auto start = std::chrono::steady_clock::now();
   const int n = static_cast<int>(rows());
   if (direct_cholmod_) {
-    if (in_double_ || !factor_->has_single()) factor_->solve(b, x, columns);
-    else factor_->solve_single(b, x, columns);
+    apply_cholmod(b, x, columns);
   } else if (ranks_ == 1 && method_ == Method::factorisation) {
     Petsc& p = *petsc_;
     Mat rhs = nullptr, solution = nullptr;

@@ -164,6 +164,7 @@ class TangentSystem {
   bool factored() const;                            // a factorisation to precondition with
   bool factorise(SolveStats& stats);               // K now (false: CHOLMOD failed, PETSc's LDL' next)
   void apply_factor(const double* b, double* x);  // P^-1 b, one column, untimed
+  void apply_cholmod(const double* b, double* x, int columns);  // P^-1 B, in the precision in_double_ says
   bool factor_cholmod(SolveStats& stats);  // false: not positive definite (PETSc takes over)
   void set_up_cholmod();
   void reset_cholmod();
