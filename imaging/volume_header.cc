@@ -58,7 +58,9 @@ void check_vector(const std::filesystem::path& path, const std::string& key, con
   if (n != 3) throw std::runtime_error(path.string() + ": " + key + " = " + shown(value) + "; expected 3 numbers, each " + bounds.what);
 }
 
-// The voxel count of three sizes (DimSize, NRRD sizes), each a whole number from 1 to 10^5.
+// The voxel count of three sizes (DimSize, NRRD sizes), each a whole number from 1 to 10^5 written
+// in decimal digits: VTK's NRRD reader takes a size with atoi, so "0x10" or "1e2" would be 0 or 1
+// to it (a size of 0 made it copy past its buffer; found by fuzz_volume).
 double checked_sizes(const std::filesystem::path& path, const std::string& key, const std::string& value) {
   if (value.empty()) throw std::runtime_error(path.string() + ": the header has no " + key);
   std::istringstream in(value);
@@ -68,7 +70,7 @@ double checked_sizes(const std::filesystem::path& path, const std::string& key, 
   for (; in >> word; ++n) {
     char* end = nullptr;
     const double d = std::strtod(word.c_str(), &end);
-    if (*end != '\0' || !(d >= 1 && d <= 1e5) || d != std::floor(d) || n >= 3)
+    if (*end != '\0' || word.find_first_not_of("0123456789") != std::string::npos || !(d >= 1 && d <= 1e5) || n >= 3)
       throw std::runtime_error(path.string() + ": " + key + " = " + shown(value) + "; expected 3 whole numbers from 1 to 100000");
     voxels *= d;
   }
@@ -116,7 +118,7 @@ constexpr std::size_t kMaxMetaImageLine = 480, kMaxMetaImageKey = 200, kMaxMetaI
 // A text header's "key = value" (MetaImage) or "key: value" (NRRD) lines, up to the data: the
 // line ElementDataFile (MetaImage) or an empty line (NRRD). `end` is the header's size in bytes.
 std::map<std::string, std::string> text_header(const std::filesystem::path& path, char separator,
-                                               std::streamoff* end) {
+                                               std::streamoff* end, std::map<std::string, int>* lines) {
   std::error_code error;
   if (!std::filesystem::is_regular_file(path, error))
     throw std::runtime_error(path.string() + ": not a regular file (a volume is a file, not a FIFO or device)");
@@ -155,7 +157,9 @@ std::map<std::string, std::string> text_header(const std::filesystem::path& path
     if (separator == ':' && number == 1 &&
         !(trim(line).size() == 8 && trim(line).compare(0, 7, "NRRD000") == 0 && trim(line)[7] >= '1' && trim(line)[7] <= '5'))
       throw std::runtime_error(path.string() + ":1: '" + shown(line) + "' is not a NRRD magic line; expected NRRD0001 to NRRD0005");
-    if (separator == ':' && trim(line).empty()) break;
+    // NRRD's header ends where VTK's reader ends it: at an empty line ("\n\n" or "\n\r\n"). A line of
+    // blanks is no end to it (it would read on into the data), so it is refused below.
+    if (separator == ':' && (line.empty() || line == "\r")) break;
     if (separator == ':' && !line.empty() && line[0] == '#') continue;  // NRRD comments
     const auto at = line.find(separator);
     // NRRD is strict: after the magic line, each line is "field: value" or "key:=value" (VTK's
@@ -164,6 +168,11 @@ std::map<std::string, std::string> text_header(const std::filesystem::path& path
         (at == std::string::npos || at == 0 || at + 1 >= line.size() || (line[at + 1] != ' ' && line[at + 1] != '=')))
       throw std::runtime_error(path.string() + ":" + std::to_string(number) + ": '" + shown(line) +
                                "' is not a NRRD field; expected 'field: value'");
+    // VTK's reader matches a field's name as written: " sizes: 8 8 8" or "sizes : 8 8 8" is no sizes
+    // to it (it then read the data through a file it never opened; found by fuzz_volume).
+    if (separator == ':' && number > 1 && trim(line.substr(0, at)) != line.substr(0, at))
+      throw std::runtime_error(path.string() + ":" + std::to_string(number) + ": '" + shown(line) +
+                               "': a NRRD field's name has no blanks around it; expected 'field: value'");
     // MetaImage is strict too: VTK's MetaIO takes a line without '=' as a key whose value is the next
     // line (the data's first bytes, past ElementDataFile) and copies a key of over 254 characters
     // into a 255-byte field name (a fortified abort; found by fuzz_sweep).
@@ -198,6 +207,7 @@ std::map<std::string, std::string> text_header(const std::filesystem::path& path
     if (!keys.emplace(key, value).second)
       throw std::runtime_error(path.string() + ":" + std::to_string(number) + ": '" + shown(key) +
                                "' is given a second time; a header names each field once");
+    if (lines) (*lines)[key] = number;
     if (key == "ElementDataFile") break;  // MetaImage's last header line
   }
   return keys;
@@ -265,7 +275,8 @@ void check_metaimage_size(const std::filesystem::path& path) {
 // NRRD: the same check for raw and gzip-encoded data, inline or in a detached file.
 void check_nrrd_size(const std::filesystem::path& path) {
   std::streamoff header = 0;
-  auto keys = text_header(path, ':', &header);
+  std::map<std::string, int> line_of;
+  auto keys = text_header(path, ':', &header, &line_of);
   static const std::map<std::string, int> bytes{
       {"uchar", 1},  {"unsigned char", 1}, {"uint8", 1},  {"uint8_t", 1},  {"signed char", 1}, {"int8", 1},
       {"char", 1},   {"short", 2},         {"ushort", 2}, {"unsigned short", 2}, {"int16", 2}, {"uint16", 2},
@@ -278,7 +289,25 @@ void check_nrrd_size(const std::filesystem::path& path) {
     if (!keys.count(field)) throw std::runtime_error(path.string() + ": no '" + field + ":' field (NRRD requires type, dimension, sizes and encoding)");
   if (keys["dimension"] != "3")
     throw std::runtime_error(path.string() + ": dimension: " + shown(keys["dimension"]) + "; a volume has 3 dimensions");
+  // VTK's reader gives "sizes" and "spacings" as many axes as it knows of when it meets them: none
+  // before "dimension" (NRRD puts dimension before every per-axis field), and "space dimension"
+  // changes the count. Axes it lacks leave it reading the data through a file it never opened
+  // (a crash; found by fuzz_volume).
+  for (const char* field : {"sizes", "spacings", "thicknesses", "axis mins", "axismins", "axis maxs", "axismaxs", "centers",
+                            "centerings", "labels", "units", "kinds", "space directions"})
+    if (keys.count(field) && line_of[field] < line_of["dimension"])
+      throw std::runtime_error(path.string() + ":" + std::to_string(line_of[field]) + ": '" + field +
+                               "' comes before 'dimension'; NRRD gives the dimension before any per-axis field");
+  if (keys.count("space dimension") && keys["space dimension"] != "3")
+    throw std::runtime_error(path.string() + ":" + std::to_string(line_of["space dimension"]) + ": space dimension: " +
+                             shown(keys["space dimension"]) + "; a volume's space has 3 dimensions");
   const double voxels = checked_sizes(path, "sizes", keys["sizes"]);
+  // VTK's reader takes a first axis of 9 samples or fewer for the components of a vector (an RGB
+  // axis), so 8 x 12 x 8 voxels would come back as 12 x 8 x 1 vectors of 8.
+  if (const int first = std::atoi(keys["sizes"].c_str()); first <= 9)
+    throw std::runtime_error(path.string() + ":" + std::to_string(line_of["sizes"]) + ": sizes: " + shown(keys["sizes"]) +
+                             "; a first axis of " + std::to_string(first) +
+                             " samples is read as a vector's components, not as space (at least 10 along the first axis; or use .mha)");
   if (voxels > kMaxValues)
     throw std::runtime_error(path.string() + ": sizes " + shown(keys["sizes"]) + "; at most 2^30 voxels fit the memory budget");
   check_vector(path, "spacings", keys["spacings"], kSpacingMm);

@@ -94,10 +94,12 @@ TEST_F(VolumeOrientation, HandWrittenHeaders) {
   {
     std::ofstream out(dir_ / "v.nrrd", std::ios::binary);
     out << "NRRD0004\n# a comment: with a colon\ntype: unsigned char\ndimension: 3\nspace: left-posterior-superior\n"
-           "sizes: 2 3 4\nspace directions: (0,2,0) (-3,0,0) (0,0,1.5)\nspace origin: (1,2,3)\nencoding: raw\n\n"
-        << std::string(24, '\0');
+           "sizes: 10 3 4\nspace directions: (0,2,0) (-3,0,0) (0,0,1.5)\nspace origin: (1,2,3)\nencoding: raw\n\n"
+        << std::string(120, '\0');
   }
   const VolumeInfo nrrd = read_volume_info(dir_ / "v.nrrd");
+  EXPECT_EQ(nrrd.dimensions, (std::array<int, 3>{10, 3, 4}));
+  EXPECT_EQ(nrrd.components, 1);
   EXPECT_EQ(nrrd.spacing_mm, (std::array<double, 3>{2, 3, 1.5}));
   EXPECT_EQ(nrrd.origin_mm, (std::array<double, 3>{1, 2, 3}));
   EXPECT_EQ(nrrd.direction, (std::array<double, 9>{0, -1, 0, 1, 0, 0, 0, 0, 1}));
@@ -285,6 +287,40 @@ TEST_F(VolumeOrientation, BrokenFilesAreRefusedByName) {
   refused(write("empty.vti", ""), "");
   refused(dir_ / "absent.mha", "no such file");
   refused(write("volume.png", "\x89PNG"), "unknown volume format");
+}
+
+// NRRD headers that VTK's reader would read otherwise than they look (it crashed on each; found by
+// fuzz_volume) are refused, with the line; the same fields written as NRRD writes them read back.
+TEST_F(VolumeOrientation, NrrdHeadersThatVtkWouldMisreadAreRefused) {
+  std::string data(12 * 8 * 8, '\0');
+  for (std::size_t i = 0; i < data.size(); ++i) data[i] = static_cast<char>(i % 13);
+  const auto write = [&](const std::string& name, const std::string& header) {
+    std::ofstream(dir_ / name, std::ios::binary) << header << data;
+    return dir_ / name;
+  };
+  const auto refused = [&](const fs::path& path, const std::string& why) {
+    try {
+      read_volume(path);
+      ADD_FAILURE() << path << " was read; expected: " << why;
+    } catch (const std::runtime_error& e) {
+      EXPECT_NE(std::string(e.what()).find(path.string()), std::string::npos) << e.what();
+      EXPECT_NE(std::string(e.what()).find(why), std::string::npos) << e.what();
+    }
+  };
+  const std::string magic = "NRRD0004\ntype: uchar\n";
+  const Volume<float> good = read_volume(write("good.nrrd", magic + "dimension: 3\nsizes: 12 8 8\nencoding: raw\n\n"));
+  ASSERT_EQ(good.dimensions, (std::array<int, 3>{12, 8, 8}));
+  for (std::size_t i = 0; i < data.size(); ++i) ASSERT_EQ(good.data[i], float(i % 13)) << i;
+  refused(write("late.nrrd", magic + "sizes: 12 8 8\ndimension: 3\nencoding: raw\n\n"), ":3: 'sizes' comes before 'dimension'");
+  refused(write("space.nrrd", magic + "dimension: 3\nspace dimension: 2\nsizes: 12 8 8\nencoding: raw\n\n"),
+          ":4: space dimension: 2");
+  refused(write("indented.nrrd", magic + "dimension: 3\n sizes: 12 8 8\nencoding: raw\n\n"), ":4: ' sizes: 12 8 8'");
+  refused(write("spaced.nrrd", magic + "dimension: 3\nsizes : 12 8 8\nencoding: raw\n\n"), ":4: 'sizes : 12 8 8'");
+  refused(write("hex.nrrd", magic + "dimension: 3\nsizes: 0xC 8 8\nencoding: raw\n\n"), "sizes = 0xC 8 8");
+  // VTK's reader takes a first axis of 9 samples or fewer for the components of vectors.
+  refused(write("short_axis.nrrd", magic + "dimension: 3\nsizes: 8 12 8\nencoding: raw\n\n"), "first axis of 8 samples");
+  // A line of blanks does not end the header for VTK (it would read fields on into the data).
+  refused(write("blank.nrrd", magic + "dimension: 3\nsizes: 12 8 8\nencoding: raw\n  \n\n"), ":6: '  '");
 }
 
 }  // namespace
