@@ -25,6 +25,9 @@ void limit_library_threads();  // one thread inside CHOLMOD's OpenMP and OpenBLA
 struct TangentSystem::Worker {
   std::unique_ptr<CholeskyFactor> factor;
   std::vector<double> values;
+  // A request made while the warm-up factorisation ran: its values, factorised as soon as that ends.
+  std::vector<double> queued_values;
+  bool queued = false;
   std::mutex mutex;
   std::condition_variable cv;
   bool requested = false, done = false, ok = false, stop = false;
@@ -60,6 +63,11 @@ struct TangentSystem::Worker {
       lock.unlock();
       const bool success = factor->factorise(values.data());
       lock.lock();
+      if (queued) {  // that was the warm-up, asked for again meanwhile: on to the request, still not done
+        values.swap(queued_values);
+        queued = false;
+        continue;
+      }
       ok = success, done = true;
       cv.notify_all();
     }

@@ -140,6 +140,9 @@ class TangentSystem {
   // solves' tolerance, where until now they were the same bit for bit.
   bool background_late() const { return background_late_; }
   int late_background_frames() const { return late_background_frames_; }  // so far
+  // Requests made while the worker still made its warm-up factorisation: queued behind it, not waited
+  // for (the frame that asked goes on at once; lockstep waits, if at all, where it takes the result up).
+  int requests_queued_behind_warm_up() const { return queued_requests_; }
   // A factorisation requested for the background and not yet taken up (on the worker, or done there).
   bool background_under_way() const { return frames_since_request_ >= 0; }
   int max_cg_iterations = 8;
@@ -211,6 +214,7 @@ class TangentSystem {
   bool background_late_ = false;
   int late_background_frames_ = 0;
   int background_factorisations_ = 0;
+  int queued_requests_ = 0;
   std::vector<double> r_, z_, p_, q_;  // CG's vectors
   std::vector<double> snapshot_;       // PETSc: the K to factorise when taken up
   // The rank-one part, and P^-1 g while g and the factorisation P stay the same.

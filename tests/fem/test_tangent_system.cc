@@ -161,6 +161,46 @@ TEST(TangentSystem, RealTimeTakesTheBackgroundFactorisationUpAtLockstepsFrameOrW
   }
 }
 
+// The worker's first job is a warm-up factorisation (thrown away) started with the first one. A
+// request made while it runs is queued behind it rather than waited for in the frame that made it;
+// the factorisation taken up is still that of K as it was at the request (CG against it: one
+// iteration), not the warm-up's K, in lockstep (waited for at the third frame) and in real time.
+TEST(TangentSystem, ARequestDuringTheWarmUpIsQueuedBehindItAndFactorisesTheRequestedK) {
+  for (const bool deterministic : {true, false}) {
+    SCOPED_TRACE(deterministic ? "lockstep" : "real time");
+    const int n = 200000;  // a warm-up of milliseconds; the request follows the first solve at once
+    TangentSystem k;
+    k.set_deterministic(deterministic);
+    k.refactor_after_iterations = 0;  // the first CG iteration on a drifted K asks for a new factorisation
+    tridiagonal(k, n, 3.0);
+    std::vector<double> b(n), x(n);
+    for (int i = 0; i < n; ++i) b[i] = std::sin(0.1 * i) + 0.5;
+    k.begin_frame(true);
+    ASSERT_TRUE(k.solve(b.data(), x.data(), 1e-10, true).refactored);
+    tridiagonal(k, n, 3.3);
+    k.begin_frame(true);
+    const TangentSystem::SolveStats drifted = k.solve(b.data(), x.data(), 1e-2, false);
+    ASSERT_FALSE(drifted.refactored);
+    ASSERT_TRUE(k.background_under_way());
+    EXPECT_LE(k.requests_queued_behind_warm_up(), 1);
+    if (k.requests_queued_behind_warm_up() == 0) std::printf("the warm-up had ended before the request\n");
+    for (int frame = 1; k.background_under_way() && frame < 100000; ++frame) {
+      if (frame >= 3) std::this_thread::sleep_for(std::chrono::milliseconds(1));
+      k.begin_frame(true);
+      if (deterministic) {
+        EXPECT_EQ(k.background_under_way(), frame < 3) << frame;
+      }
+    }
+    ASSERT_FALSE(k.background_under_way());
+    EXPECT_EQ(k.factorisations(), 2);
+    EXPECT_EQ(k.background_factorisations(), 1);
+    const TangentSystem::SolveStats fresh = k.solve(b.data(), x.data(), 1e-10, true);
+    EXPECT_FALSE(fresh.refactored);
+    EXPECT_LE(fresh.iterations, 1);
+    EXPECT_LT(relative_residual(k, b, x), 1e-10);
+  }
+}
+
 // The blocked product against the closed form: (K x)_i = d x_i - x_{i-1} - x_{i+1} for every
 // vector of a block, whatever the block's size (passes of 4, 3, 2 and 1 vectors).
 TEST(TangentSystem, BlockedProductMatchesTheStencil) {
