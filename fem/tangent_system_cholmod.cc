@@ -112,8 +112,8 @@ void TangentSystem::request_background() {
     worker_->nice = deterministic_ ? 0 : background_nice();
     if (worker_->requested && !worker_->done) {
       // The worker is still on its warm-up (the only job it can have here): the request waits behind
-      // it on the worker, not in this frame (at 3.6 mm a warm-up takes a second; the frame waited
-      // up to 430 ms for it). The factorisation is of these values either way.
+      // it on the worker, not in this frame (at 3.6 mm a warm-up takes about a second, and the first
+      // press asks during it). The factorisation is of these values either way.
       worker_->queued_values = values_;
       worker_->queued = true;
       ++queued_requests_;
