@@ -4,9 +4,9 @@
 //   - a good take: every maneuver's zones pressed 14 mm deep by the default hand (300 N/m), the poles
 //     pressed where the label map has them, the right answers: every answer right, every maneuver
 //     reached;
-//   - a bad take: the same presses on the mother's left side only, 24 mm deep by a stiff hand
-//     (1500 N/m), the wrong
-//     presentation: the two-handed grips (umbilical, pelvic) lose their right hand's zone, the fundal
+//   - a bad take: the same presses on the mother's left side only, 27 mm deep by a stiff hand
+//     (1500 N/m; at 24 mm the head's press plateaued within 3 % of the limit on one VM's mesh, see
+//     docs/trainer.md), the wrong presentation: the two-handed grips (umbilical, pelvic) lose their right hand's zone, the fundal
 //     and Pawlik's grips still reach the midline poles, the presentation is wrong, the force passes a
 //     limit set at 1.3 times the good take's largest force and the coverage drops;
 //   - `fetouch review` of the good take: its screenshot with the paths differs from the one without
@@ -314,7 +314,7 @@ TEST(TrainerExercise, AGoodTakeScoresRightAndABadOneIsScoredDownWhereItFailed) {
   const std::string wrong = std::string(config::to_string(pose.lie)) + "," +
                             (pose.presentation == config::FetalPresentation::cephalic ? "breech" : "cephalic") + "," +
                             config::to_string(pose.back);
-  const TakeResult bad = run_take(dir / "bad", 24, 1500, true, wrong, 1.3 * good_force);
+  const TakeResult bad = run_take(dir / "bad", 27, 1500, true, wrong, 1.3 * good_force);
   ASSERT_EQ(bad.exit_code, 0) << bad.err;
   const YAML::Node& b = bad.assessment;
   EXPECT_EQ(b["answers"][0]["score"].as<double>(), 1);
