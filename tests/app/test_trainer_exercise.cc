@@ -5,9 +5,9 @@
 //     pressed where the label map has them, the right answers: every answer right, every maneuver
 //     reached;
 //   - a bad take: the same presses on the mother's left side only, 27 mm deep by a stiff hand
-//     (1500 N/m; at 24 mm the head's press plateaued within 3 % of the limit on one VM's mesh, see
-//     docs/trainer.md), the wrong presentation: the two-handed grips (umbilical, pelvic) lose their right hand's zone, the fundal
-//     and Pawlik's grips still reach the midline poles, the presentation is wrong, the force passes a
+//     (1500 N/m; at 24 mm the head's press plateaued within 3 % of the limit on one fresh mesh, see
+//     docs/trainer.md), the wrong presentation: the two-handed grips (umbilical, pelvic) lose their
+//     right hand's zone, the fundal and Pawlik's grips still reach the midline poles, the presentation is wrong, the force passes a
 //     limit set at 1.3 times the good take's largest force and the coverage drops;
 //   - `fetouch review` of the good take: its screenshot with the paths differs from the one without
 //     them where the recorded presses project through the view's camera (the projection done here),
