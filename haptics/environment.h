@@ -52,7 +52,9 @@ class Environment {
   // The answer at rest, before any force: what the haptic loop holds during the first frame.
   virtual void initial(EnvironmentUpdate& out) = 0;
   // One frame: the samples of frame j in, the answer (applied from frame j + 1) out. `out` is
-  // reused frame after frame, so an implementation can fill it without allocating.
+  // reused frame after frame, so an implementation can fill it without allocating. A frame that
+  // fails (status.converged false) hands back the last converged answer, frames and compliance:
+  // the state those samples' forces produced (the haptic loop keeps them as its Smith reference).
   virtual void solve(const std::vector<ContactSample>& samples, long frame, EnvironmentUpdate& out) = 0;
 };
 

@@ -31,6 +31,7 @@ HapticLoop::HapticLoop(const HapticLoopSettings& settings, const EnvironmentUpda
   for (FrameSlot& slot : slots_) {
     slot.update = initial;
     slot.normal_force = Eigen::VectorXd::Zero(contacts_);
+    converged_force_ = slot.normal_force;
     slot.local_model = settings.local_model;
     slot.hold = settings.hold;
   }
@@ -303,7 +304,14 @@ const std::vector<ContactOutput>& LockstepSession::tick(const std::vector<Eigen:
 FrameSlot& HapticLoop::fill_answer(Environment& environment, const std::vector<ContactSample>& samples, long frame) {
   FrameSlot& slot = pending_slot();
   environment.solve(samples, frame, slot.update);
-  for (int c = 0; c < contacts_; ++c) slot.normal_force(c) = samples[c].normal_force;
+  // The Smith reference is the force that produced the surface the answer holds. A frame that
+  // failed hands back the last converged answer (environment.h), made under that frame's forces,
+  // not this one's: taken as this one's, the predictor would see no give for the force added since,
+  // and the integrator would wind the force up frame after frame (a deep press whose frames failed
+  // went to the 3.3 N clamp in 0.3 s, at an unchanged depth).
+  if (slot.update.status.converged)
+    for (int c = 0; c < contacts_; ++c) converged_force_(c) = samples[c].normal_force;
+  slot.normal_force = converged_force_;
   slot.local_model = producer_model_;
   slot.hold = producer_hold_;
   prepare(slot);

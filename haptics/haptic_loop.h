@@ -249,6 +249,7 @@ class HapticLoop {
 
   std::vector<ContactFrame> held_;
   Eigen::VectorXd penetration_, zeros_, reference_;
+  Eigen::VectorXd converged_force_;  // the samples' normal forces behind the last converged answer (producer side)
   std::vector<ContactSample> samples_;
   std::vector<ContactOutput> outputs_;
   std::vector<ForceSafety> safety_;

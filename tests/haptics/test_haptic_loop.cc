@@ -307,6 +307,71 @@ TEST(HapticLoop, ALateAnswerHoldsTheNewestSurfaceAndPausesTheIntegrator) {
   EXPECT_EQ(loop.late_answers(), 1);
 }
 
+// An environment whose frames fail from a given frame on, as the FEM's do past what it can solve:
+// each failed frame hands back the last converged answer (environment.h), status not converged.
+class FailingFrom final : public Environment {
+ public:
+  FailingFrom(Environment& inner, long first_failure) : inner_(inner), first_failure_(first_failure) {}
+  int contacts() const override { return inner_.contacts(); }
+  void initial(EnvironmentUpdate& out) override { inner_.initial(out), last_good_ = out; }
+  void solve(const std::vector<ContactSample>& samples, long frame, EnvironmentUpdate& out) override {
+    if (frame < first_failure_) {
+      inner_.solve(samples, frame, out);
+      last_good_ = out;
+      return;
+    }
+    out = last_good_;
+    out.frame = frame;
+    out.status.converged = false;
+    out.status.message = "failed on purpose";
+  }
+
+ private:
+  Environment& inner_;
+  long first_failure_;
+  EnvironmentUpdate last_good_;
+};
+
+// A press that goes on deepening while the frames fail: the loop holds the last converged surface,
+// and the Smith predictor carries the press on from it at the condensed compliance, so the force
+// follows the tissue's own, k times the depth, as closely as when every frame converges. (Taking
+// each failed frame's forces as the reference instead wound the force up to the clamp.)
+TEST(HapticLoop, FailedFramesKeepTheForceOnTheLastConvergedSurface) {
+  const double k = 200;  // N/m
+  HapticLoopSettings settings;
+  settings.local_model = LocalModelKind::pi_smith;
+  settings.hold = HoldKind::zoh;
+  ContactFrame rest;
+  const auto press = [&](long first_failure) {
+    auto tissue = LinearSurfaceEnvironment::isotropic({rest}, k, 0);
+    FailingFrom environment(tissue, first_failure);
+    HapticLoop loop(settings, initial_update(environment));
+    LockstepSession session(loop, environment);
+    std::vector<double> force, depth;
+    std::vector<Eigen::Vector3d> device(1);
+    const int ticks = static_cast<int>(2.0 / settings.period_s);  // 2 s: 5 mm down in 1 s, then held
+    for (int t = 0; t < ticks; ++t) {
+      const double d = 0.005 * std::min(1.0, t * settings.period_s);
+      device[0] = Eigen::Vector3d(0, 0, -d);
+      force.push_back(session.tick(device)[0].normal_force);
+      depth.push_back(d);
+    }
+    return std::make_pair(force, depth);
+  };
+  const auto [converging, depth] = press(1L << 40);
+  const auto [failing, unused] = press(10);  // from 0.5 s on (2.5 mm deep, 0.5 N), every frame fails
+  double worst = 0, worst_converging = 0;
+  for (std::size_t t = 1200; t < failing.size(); ++t) {  // settled after the press stopped
+    worst = std::max(worst, std::abs(failing[t] - k * depth[t]));
+    worst_converging = std::max(worst_converging, std::abs(converging[t] - k * depth[t]));
+  }
+  EXPECT_NEAR(failing.back(), k * depth.back(), 0.02 * k * depth.back());
+  EXPECT_LT(worst, 0.02 * k * 0.005) << "converging frames: " << worst_converging << " N";
+  double largest = 0;
+  for (const double f : failing) largest = std::max(largest, f);
+  EXPECT_LT(largest, 1.1 * k * 0.005);
+}
+
 TEST(HapticLoop, ForcesSentAreAlwaysFiniteAndClamped) {
   HapticLoopSettings settings;
   settings.local_model = LocalModelKind::pi;
