@@ -71,6 +71,7 @@ CholeskyFactor::CholeskyFactor(int rows, const int* row_start, const int* column
   std::fill_n(static_cast<double*>(c.a->x), nonzeros, 0.0);
   c.l = cholmod_analyze(c.a, &c.common);
   if (!c.l) throw std::runtime_error("CHOLMOD could not analyse the tangent's pattern");
+  flops_ = c.common.fl;
   if (c.l->is_super) {  // the largest supernode's rows: solve_single's workspace
     const int* pi = static_cast<const int*>(c.l->pi);
     for (std::size_t s = 0; s < c.l->nsuper; ++s) widest_ = std::max<std::size_t>(widest_, pi[s + 1] - pi[s]);

@@ -33,11 +33,14 @@ class CholeskyFactor {
   // Entries of L as the symbolic analysis laid it out (supernodal: the dense blocks' entries).
   std::size_t factor_entries() const;
   bool has_single() const { return valid_ && !single_.empty(); }
+  // Floating-point operations of one numeric factorisation, by the symbolic analysis.
+  double flops() const { return flops_; }
 
  private:
   struct Cholmod;
   std::unique_ptr<Cholmod> c_;
   bool valid_ = false;
+  double flops_ = 0;
   std::vector<float> single_;
   std::vector<float> single_work_;
   std::size_t widest_ = 0;  // rows of the largest supernode

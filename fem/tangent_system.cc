@@ -119,7 +119,12 @@ void TangentSystem::set_pattern(std::vector<int> row_start, std::vector<int> col
     check(VecCreateMPIWithArray(comm_, 1, local, n, nullptr, &p.x), "creating a vector");
   }
   direct_cholmod_ = ranks_ == 1 && method == Method::factorisation;
+  factorisation_flops_ = 0;
   if (direct_cholmod_) set_up_cholmod();
+  else if (method == Method::factorisation && rows() <= background_analysed_rows)
+    // Several ranks factorise by MUMPS; CHOLMOD's analysis of the same pattern gives the schedule of
+    // background factorisations that one rank keeps (background_due_frames).
+    factorisation_flops_ = CholeskyFactor(n, row_start_.data(), columns_.data()).flops();
   near_null_vectors_ = static_cast<int>(near_null_space.size());
   node_block_ = node_block;
   near_null_space_.clear();
@@ -465,7 +470,7 @@ void TangentSystem::apply_rank_one(double* x, int columns, SolveStats& stats) {
 
 void TangentSystem::apply_raw(const double* b, double* x, int columns, SolveStats& stats) {
   // A factorisation that is due first (PETSc's LDL' where CHOLMOD finds K not positive definite).
-  if ((!factored() || refactor_) && !factorise(stats)) factorise(stats);
+  if (!factored() || refactor_) factorise(stats);
   const auto start = std::chrono::steady_clock::now();
   const int n = static_cast<int>(rows());
   if (direct_cholmod_) {

@@ -20,10 +20,13 @@
 // (begin_frame(true)) a solve never pays a factorisation: when CG needs more than
 // refactor_after_iterations, the current K is handed to a worker thread that factorises it while
 // frames go on with the old factorisation, and the new one is taken up at the start of the frame
-// `swap_after_frames` later (waited for there if not ready, so lockstep replays stay
+// background_due_frames() later, 1 to `swap_after_frames` as its flops take (waited for there if not
+// ready, so lockstep replays stay
 // bit-reproducible; undeterministic mode, real time, takes it up there if it is ready and otherwise
 // at the first frame after at which it is: background_late()).
-// A K that is not positive definite falls back to PETSc's MUMPS LDL'.
+// A K that is not positive definite is factorised by PETSc's MUMPS LDL', and the solves go back
+// to CHOLMOD at the first K that is again (the worker's, within frames; the next factorisation,
+// outside them).
 //
 // Or, selectable (and chosen by size in the scene), CG preconditioned by algebraic multigrid
 // (PETSc's GAMG, plain aggregation of nodes matched along their heaviest couplings, told the
@@ -115,7 +118,17 @@ class TangentSystem {
   // Returns the seconds it waited for a background factorisation.
   double begin_frame(bool frame);  // collective under MPI
   void set_deterministic(bool on) { deterministic_ = on; }
+  // A background factorisation is due ceil(F / background_flops_per_frame) frames after its request,
+  // F the flops of one factorisation of this pattern (CHOLMOD's symbolic analysis, on any number of
+  // ranks, so that every rank count keeps one schedule), at least 1 and at most swap_after_frames;
+  // swap_after_frames itself for patterns over background_analysed_rows rows or with
+  // background_flops_per_frame 0. The default, 10^9, is a 20 Hz frame's time at the 20 GFlop/s this
+  // 2-core VM's one core factorises at (the anatomy at 8 mm: 5 x 10^8 flops, 22 ms): a
+  // factorisation that fits in a frame is taken up at the next, not left stale for three.
   int swap_after_frames = 3;
+  double background_flops_per_frame = 1e9;
+  std::size_t background_analysed_rows = 60'000;
+  int background_due_frames() const;
   // CG on a stale factorisation applies a single-precision copy of it (the same supernodal factor
   // with its entries rounded, solved by the BLAS's single-precision routines): half the bytes of a
   // triangular solve, which streams the factor and is bound by memory bandwidth. A factorisation
@@ -150,6 +163,10 @@ class TangentSystem {
   int refactor_after_iterations = 5;
   // Factorisations so far.
   int factorisations() const { return factorisations_; }
+  // One rank: the solves are on CHOLMOD's factorisation now (false on MUMPS's, for a K that was not
+  // positive definite, until a K that is is factorised); and how often they left it so far.
+  bool cholmod() const { return direct_cholmod_; }
+  int cholmod_departures() const { return cholmod_departures_; }
   // AMG's hierarchy as set up last, the fine level first: rows and stored entries (nonzeros) of each
   // level's operator. Empty for the direct path and before the first AMG solve. Collective under MPI.
   struct Level {
@@ -161,14 +178,13 @@ class TangentSystem {
 
  private:
   void factor(SolveStats& stats);
-  bool cholmod() const { return direct_cholmod_; }
   // CG preconditioned by the current factorisation, CHOLMOD's or PETSc's (tangent_system_cholmod.cc).
   SolveStats solve_factorised(const double* b, double* x, double tolerance, bool zero_guess);
   bool factored() const;                            // a factorisation to precondition with
-  bool factorise(SolveStats& stats);               // K now (false: CHOLMOD failed, PETSc's LDL' next)
+  void factorise(SolveStats& stats);               // K now (CHOLMOD, or MUMPS's LDL' where K is not positive definite)
   void apply_factor(const double* b, double* x);  // P^-1 b, one column, untimed
   void apply_cholmod(const double* b, double* x, int columns);  // P^-1 B, in the precision in_double_ says
-  bool factor_cholmod(SolveStats& stats);  // false: not positive definite (PETSc takes over)
+  bool factor_cholmod(SolveStats& stats);  // false: not positive definite (leave_cholmod: MUMPS's LDL' for it)
   void set_up_cholmod();
   void reset_cholmod();
   void request_background();
@@ -193,8 +209,12 @@ class TangentSystem {
   int factorisations_ = 0;
   struct Petsc;
   std::unique_ptr<Petsc> petsc_;
-  // One rank, factorisation: CHOLMOD directly, a worker for background factorisations.
+  // One rank, factorisation: CHOLMOD directly, a worker for background factorisations. The solves
+  // leave it for MUMPS while K is not positive definite (leave_cholmod), and come back.
   bool direct_cholmod_ = false;
+  int cholmod_departures_ = 0;
+  void leave_cholmod();
+  double factorisation_flops_ = 0;  // of CHOLMOD's factorisation of this pattern (0: not analysed)
   std::unique_ptr<CholeskyFactor> factor_;
   struct Worker;
   std::unique_ptr<Worker> worker_;

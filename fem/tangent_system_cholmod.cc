@@ -46,6 +46,7 @@ void TangentSystem::set_up_cholmod() {
   const bool single = single_precision_preconditioner && factor_->factor_entries() >= single_precision_min_entries &&
                       !(precision && std::string(precision) == "double");
   factor_->single_copy = single, worker_->factor->single_copy = single;
+  factorisation_flops_ = factor_->flops();
 }
 
 // ---- one rank: CHOLMOD directly, background factorisations ---------------------------------------
@@ -55,12 +56,8 @@ bool TangentSystem::factor_cholmod(SolveStats& stats) {
   const auto start = std::chrono::steady_clock::now();
   const bool ok = factor_->factorise(values_.data());
   stats.factor_s += since(start);
-  if (!ok) {  // not positive definite: PETSc's MUMPS LDL' from now on (for this pattern)
-    direct_cholmod_ = false;
-    worker_.reset();
-    push_values();  // PETSc has not seen K's values while CHOLMOD had them
-    create_solver(MATSOLVERMUMPS);
-    refactor_ = true;
+  if (!ok) {  // not positive definite: PETSc's MUMPS LDL' for this K (leave_cholmod)
+    leave_cholmod();
     return false;
   }
   refactor_ = false;
@@ -81,6 +78,22 @@ bool TangentSystem::factor_cholmod(SolveStats& stats) {
     worker_->cv.notify_all();
   }
   return true;
+}
+
+// K is not positive definite (a tissue past a limit point, or a soft region under a deep press
+// whose stiffness, without the liquid's rank-one part, has lost definiteness): MUMPS's LDL'
+// factorises it, and the frames solve with that. Only for as long as K stays so: the worker keeps
+// factorising by CHOLMOD in the background, and the first of its factorisations that succeeds
+// brings the solves back onto CHOLMOD (take_background). Until 2026-11-29 one such K kept the
+// session on MUMPS to its end, with every later factorisation made in the frame, not the
+// background, and each CG iteration 3-4 times as long (the Leopold exercise's two hands, 8 mm:
+// from the 443rd frame of 562 on, frames of 100-275 ms).
+void TangentSystem::leave_cholmod() {
+  direct_cholmod_ = false;
+  push_values();  // PETSc has not seen K's values while CHOLMOD had them
+  if (std::string(solver_type_) != MATSOLVERMUMPS) create_solver(MATSOLVERMUMPS);
+  refactor_ = true;
+  ++cholmod_departures_;
 }
 
 namespace {
@@ -156,15 +169,24 @@ double TangentSystem::take_background(bool wait) {
   worker_->requested = worker_->done = false;
   frames_since_request_ = -1;
 
-  if (!worker_->ok) {  // that K was not positive definite: the next solve refactors (and falls back)
+  if (!worker_->ok) {  // that K was not positive definite: the next solve refactors it by MUMPS
+    if (direct_cholmod_) leave_cholmod();
     refactor_ = true;
     return waited;
   }
   std::swap(factor_, worker_->factor);
+  direct_cholmod_ = true;  // K is positive definite (again, after leave_cholmod)
   baseline_iterations_ = -1;
   ++factorisations_;
   ++background_factorisations_;
   return waited;
+}
+
+int TangentSystem::background_due_frames() const {
+  if (!(background_flops_per_frame > 0) || !(factorisation_flops_ > 0) || rows() > background_analysed_rows)
+    return swap_after_frames;
+  const double frames = std::ceil(factorisation_flops_ / background_flops_per_frame);
+  return static_cast<int>(std::clamp(frames, 1.0, static_cast<double>(std::max(1, swap_after_frames))));
 }
 
 double TangentSystem::begin_frame(bool frame) {
@@ -176,19 +198,21 @@ double TangentSystem::begin_frame(bool frame) {
   // in both modes, so that real time solves what lockstep solves while the worker keeps up. There
   // lockstep waits for it; real time goes on with the old factorisation and takes it up at the
   // first frame after at which it is ready.
-  if (frames_since_request_ < swap_after_frames && in_frame_) return 0;
+  if (frames_since_request_ < background_due_frames() && in_frame_) return 0;
   const double waited = take_background(/*wait=*/deterministic_);
   background_late_ = frames_since_request_ >= 0;
   late_background_frames_ += background_late_;
   return waited;
 }
 
-// K factorised now, by CHOLMOD or PETSc. False where CHOLMOD found K not positive definite: PETSc's
-// LDL' has taken over and factorises at the next call.
-bool TangentSystem::factorise(SolveStats& stats) {
-  if (direct_cholmod_) return factor_cholmod(stats);
-  factor(stats);
-  return true;
+// K factorised now: by CHOLMOD on one rank, by MUMPS's LDL' where CHOLMOD finds K not positive
+// definite (leave_cholmod), by PETSc's MUMPS on several ranks.
+void TangentSystem::factorise(SolveStats& stats) {
+  // Off CHOLMOD since a K that was not positive definite, outside frames (where no worker brings the
+  // solves back): CHOLMOD first again.
+  if (!direct_cholmod_ && factor_ && !in_frame_) direct_cholmod_ = true;
+  if (direct_cholmod_ && factor_cholmod(stats)) return;
+  factor(stats);  // PETSc's: MUMPS's LDL' where CHOLMOD has just found K not positive definite
 }
 
 // Preconditioned CG on the current K (+ c g g') with the factorisation of an earlier one (+ c g g',
@@ -220,7 +244,7 @@ TangentSystem::SolveStats TangentSystem::solve_factorised(const double* b, doubl
     stats.rank_one = rank_one_c_ != 0;
   };
   if (!factored() || refactor_) {
-    if (!factorise(stats)) return solve(b, x, tolerance, false);  // PETSc's LDL' from here
+    factorise(stats);
     direct();
     return stats;
   }
@@ -272,7 +296,7 @@ TangentSystem::SolveStats TangentSystem::solve_factorised(const double* b, doubl
   }
   // CG on the old factorisation did not get there: factorise K now and solve directly.
   std::fill(x, x + n, 0.0);
-  if (!factorise(stats)) return solve(b, x, tolerance, true);
+  factorise(stats);
   direct();
   return stats;
 }

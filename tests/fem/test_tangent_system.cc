@@ -11,6 +11,7 @@
 #include <utility>
 #include <vector>
 
+#include "fem/cholesky_factor.h"
 #include "fem/tangent_system.h"
 
 namespace fetouch::fem {
@@ -97,6 +98,7 @@ TEST(TangentSystem, ADriftedFactorisationIsReplacedFromTheBackgroundThreeFramesL
   const int n = 200;
   TangentSystem k;
   k.set_deterministic(true);
+  k.background_flops_per_frame = 0;  // the schedule of a factorisation that takes frames
   tridiagonal(k, n, 2.0);
   std::vector<double> b(n), x(n);
   for (int i = 0; i < n; ++i) b[i] = std::sin(0.1 * i) + 0.5;
@@ -127,6 +129,37 @@ TEST(TangentSystem, ADriftedFactorisationIsReplacedFromTheBackgroundThreeFramesL
   EXPECT_LT(relative_residual(k, b, x), 1e-10);
 }
 
+// The frame a background factorisation is due at follows its cost: ceil(F / flops per frame)
+// frames after the request, F the flops of one factorisation (CHOLMOD's analysis, here of the same
+// pattern by a factor of its own), 1 to swap_after_frames. Lockstep takes it up exactly there.
+TEST(TangentSystem, ABackgroundFactorisationIsDueAsManyFramesAfterItsRequestAsItsFlopsTake) {
+  const int n = 200;
+  std::vector<int> start{0}, columns;
+  for (int i = 0; i < n; ++i) {
+    for (int j = std::max(0, i - 1); j <= std::min(n - 1, i + 1); ++j) columns.push_back(j);
+    start.push_back(static_cast<int>(columns.size()));
+  }
+  const double flops = CholeskyFactor(n, start.data(), columns.data()).flops();
+  ASSERT_GT(flops, 0);
+  for (const auto& [per_frame, due] : std::vector<std::pair<double, int>>{
+           {1e9, 1}, {flops / 1.5, 2}, {flops / 2.5, 3}, {flops / 40, 3}, {0.0, 3}}) {
+    SCOPED_TRACE(due);
+    TangentSystem k;
+    k.set_deterministic(true);
+    k.background_flops_per_frame = per_frame;
+    std::vector<double> b, x;
+    drift_by_a_tenth(k, n, b, x, 1e-10);
+    ASSERT_TRUE(k.background_under_way());
+    EXPECT_EQ(k.background_due_frames(), due);
+    for (int frame = 1; frame < due; ++frame) {
+      k.begin_frame(true);
+      EXPECT_TRUE(k.background_under_way()) << "taken up early, frame " << frame;
+    }
+    k.begin_frame(true);
+    expect_the_requested_k_factorised(k, b, x);
+  }
+}
+
 // Real time (not deterministic) keeps lockstep's schedule while the worker keeps up: a background
 // factorisation that is ready early is still taken up at the third frame, never before, so the
 // frames solve what lockstep's solve. One not ready there is not waited for: that frame and each
@@ -137,6 +170,7 @@ TEST(TangentSystem, RealTimeTakesTheBackgroundFactorisationUpAtLockstepsFrameOrW
     SCOPED_TRACE(n);
     TangentSystem k;
     k.set_deterministic(false);
+    k.background_flops_per_frame = 0;  // the schedule of a factorisation that takes frames
     ASSERT_EQ(k.swap_after_frames, 3);
     // CG on the old factorisation converges, in more than refactor_after_iterations and fewer than
     // the frames' limit.
@@ -186,6 +220,7 @@ TEST(TangentSystem, ARequestDuringTheWarmUpIsQueuedBehindItAndFactorisesTheReque
     const int n = 200000;  // a warm-up of milliseconds; the request follows the first solve at once
     TangentSystem k;
     k.set_deterministic(deterministic);
+    k.background_flops_per_frame = 0;  // the schedule of a factorisation that takes frames
     k.refactor_after_iterations = 0;  // the first CG iteration on a drifted K asks for a new factorisation
     std::vector<double> b, x;
     const auto [first, drifted] = drift_by_a_tenth(k, n, b, x, 1e-2);
@@ -236,6 +271,65 @@ TEST(TangentSystem, IndefiniteMatrixFallsBackToLdl) {
   std::vector<double> b(n, 1.0), x(n);
   k.solve(b.data(), x.data(), 1e-10, true);
   EXPECT_LT(relative_residual(k, b, x), 1e-10);
+}
+
+// A K that is not positive definite is factorised by LDL' for as long as K stays so, not for the rest
+// of the session: outside frames the next factorisation of a positive definite K is CHOLMOD's again.
+// tridiag(-1, 0.5, -1) has eigenvalues of both signs, tridiag(-1, 3, -1) lies in 1..5.
+TEST(TangentSystem, AnIndefiniteKLeavesCholmodOnlyUntilTheNextPositiveDefiniteOne) {
+  const int n = 50;
+  TangentSystem k;
+  std::vector<double> b(n), x(n);
+  for (int i = 0; i < n; ++i) b[i] = std::cos(0.3 * i);
+  tridiagonal(k, n, 3.0);
+  k.solve(b.data(), x.data(), 1e-10, true);
+  EXPECT_TRUE(k.cholmod());
+  tridiagonal(k, n, 0.5);
+  k.refactor_next();
+  EXPECT_TRUE(k.solve(b.data(), x.data(), 1e-10, true).refactored);
+  EXPECT_LT(relative_residual(k, b, x), 1e-10);
+  EXPECT_FALSE(k.cholmod());
+  EXPECT_EQ(k.cholmod_departures(), 1);
+  tridiagonal(k, n, 3.0);
+  k.refactor_next();
+  EXPECT_TRUE(k.solve(b.data(), x.data(), 1e-10, true).refactored);
+  EXPECT_LT(relative_residual(k, b, x), 1e-10);
+  EXPECT_TRUE(k.cholmod());
+  EXPECT_EQ(k.cholmod_departures(), 1);
+}
+
+// Within frames (lockstep) a factorisation due there finds K not positive definite: LDL' carries
+// the frames, and once K is positive definite again and CG on the old factorisation drifts, the
+// worker's CHOLMOD factorisation is taken up three frames after the request and the solves are
+// back on CHOLMOD. Every solve meets its tolerance on the way.
+TEST(TangentSystem, WithinFramesTheWorkersFactorisationBringsTheSolvesBackToCholmod) {
+  const int n = 200;
+  TangentSystem k;
+  k.set_deterministic(true);
+  std::vector<double> b(n), x(n, 0.0);
+  for (int i = 0; i < n; ++i) b[i] = std::sin(0.1 * i) + 0.5;
+  tridiagonal(k, n, 3.0);
+  k.begin_frame(true);
+  k.solve(b.data(), x.data(), 1e-10, true);
+  ASSERT_TRUE(k.cholmod());
+  tridiagonal(k, n, 0.5);
+  k.refactor_next();
+  k.begin_frame(true);
+  k.solve(b.data(), x.data(), 1e-10, true);
+  EXPECT_LT(relative_residual(k, b, x), 1e-10);
+  EXPECT_FALSE(k.cholmod());
+  // Positive definite from here, stiffening frame by frame (the old factorisation drifts).
+  double diagonal = 2.2;
+  int frames = 0;
+  for (; frames < 12 && !k.cholmod(); ++frames, diagonal *= 1.15) {
+    tridiagonal(k, n, diagonal);
+    k.begin_frame(true);
+    k.solve(b.data(), x.data(), 1e-10, frames == 0);
+    EXPECT_LT(relative_residual(k, b, x), 1e-10) << "frame " << frames;
+  }
+  EXPECT_TRUE(k.cholmod()) << "still on LDL' after " << frames << " frames";
+  EXPECT_GE(k.background_factorisations(), 1);
+  EXPECT_EQ(k.cholmod_departures(), 1);
 }
 
 // The 7-point Laplacian on an m^3 grid with a coefficient per cell drawn over three decades (a
