@@ -333,9 +333,11 @@ class FailingFrom final : public Environment {
 };
 
 // A press that goes on deepening while the frames fail: the loop holds the last converged surface,
-// and the Smith predictor carries the press on from it at the condensed compliance, so the force
-// follows the tissue's own, k times the depth, as closely as when every frame converges. (Taking
-// each failed frame's forces as the reference instead wound the force up to the clamp.)
+// and the Smith predictor carries the press on from it at the condensed compliance. On a linear
+// tissue with W exact that prediction is the tissue's own surface, x_held + W (F - F_ref), so the
+// force is the one rendered when every frame converges, tick for tick to round-off, and settles
+// at k times the depth. (Each failed frame's forces taken as the reference instead wound the force
+// up to the clamp: 3.8 N for 1 N.)
 TEST(HapticLoop, FailedFramesKeepTheForceOnTheLastConvergedSurface) {
   const double k = 200;  // N/m
   HapticLoopSettings settings;
@@ -360,16 +362,10 @@ TEST(HapticLoop, FailedFramesKeepTheForceOnTheLastConvergedSurface) {
   };
   const auto [converging, depth] = press(1L << 40);
   const auto [failing, unused] = press(10);  // from 0.5 s on (2.5 mm deep, 0.5 N), every frame fails
-  double worst = 0, worst_converging = 0;
-  for (std::size_t t = 1200; t < failing.size(); ++t) {  // settled after the press stopped
-    worst = std::max(worst, std::abs(failing[t] - k * depth[t]));
-    worst_converging = std::max(worst_converging, std::abs(converging[t] - k * depth[t]));
-  }
-  EXPECT_NEAR(failing.back(), k * depth.back(), 0.02 * k * depth.back());
-  EXPECT_LT(worst, 0.02 * k * 0.005) << "converging frames: " << worst_converging << " N";
-  double largest = 0;
-  for (const double f : failing) largest = std::max(largest, f);
-  EXPECT_LT(largest, 1.1 * k * 0.005);
+  double apart = 0;
+  for (std::size_t t = 0; t < failing.size(); ++t) apart = std::max(apart, std::abs(failing[t] - converging[t]));
+  EXPECT_LT(apart, 1e-9);
+  EXPECT_NEAR(failing.back(), k * depth.back(), 1e-6);
 }
 
 TEST(HapticLoop, ForcesSentAreAlwaysFiniteAndClamped) {
