@@ -91,7 +91,7 @@ bool TangentSystem::factor_cholmod(SolveStats& stats) {
 void TangentSystem::leave_cholmod() {
   direct_cholmod_ = false;
   push_values();  // PETSc has not seen K's values while CHOLMOD had them
-  if (std::string(solver_type_) != MATSOLVERMUMPS) create_solver(MATSOLVERMUMPS);
+  if (!solver_type_ || std::string(solver_type_) != MATSOLVERMUMPS) create_solver(MATSOLVERMUMPS);
   refactor_ = true;
   ++cholmod_departures_;
 }
@@ -109,7 +109,7 @@ int background_nice() {
 }
 }  // namespace
 
-// A factorisation of K as it is now, taken up `swap_after_frames` frames later. On one rank the
+// A factorisation of K as it is now, taken up background_due_frames() frames later. On one rank the
 // worker makes it meanwhile; through PETSc (MPI) the snapshot is factorised when it is taken up, so
 // that both follow the same schedule and factorise the same matrices (MPI = serial).
 void TangentSystem::request_background() {
@@ -194,7 +194,7 @@ double TangentSystem::begin_frame(bool frame) {
   background_late_ = false;
   if (frames_since_request_ < 0) return 0;
   ++frames_since_request_;
-  // Due at the `swap_after_frames`th frame after the request (or the next solve outside frames),
+  // Due at the background_due_frames()th frame after the request (or the next solve outside frames),
   // in both modes, so that real time solves what lockstep solves while the worker keeps up. There
   // lockstep waits for it; real time goes on with the old factorisation and takes it up at the
   // first frame after at which it is ready.

@@ -300,8 +300,8 @@ TEST(TangentSystem, AnIndefiniteKLeavesCholmodOnlyUntilTheNextPositiveDefiniteOn
 
 // Within frames (lockstep) a factorisation due there finds K not positive definite: LDL' carries
 // the frames, and once K is positive definite again and CG on the old factorisation drifts, the
-// worker's CHOLMOD factorisation is taken up three frames after the request and the solves are
-// back on CHOLMOD. Every solve meets its tolerance on the way.
+// worker's CHOLMOD factorisation is taken up at its due frame (the next one, for so few flops) and
+// the solves are back on CHOLMOD. Every solve meets its tolerance on the way.
 TEST(TangentSystem, WithinFramesTheWorkersFactorisationBringsTheSolvesBackToCholmod) {
   const int n = 200;
   TangentSystem k;
