@@ -185,6 +185,7 @@ class TangentSystem {
   void apply_factor(const double* b, double* x);  // P^-1 b, one column, untimed
   void apply_cholmod(const double* b, double* x, int columns);  // P^-1 B, in the precision in_double_ says
   bool factor_cholmod(SolveStats& stats);  // false: not positive definite (leave_cholmod: MUMPS's LDL' for it)
+  void leave_cholmod();  // MUMPS's LDL' for this K, until a K that is positive definite
   void set_up_cholmod();
   void reset_cholmod();
   void request_background();
@@ -213,7 +214,6 @@ class TangentSystem {
   // leave it for MUMPS while K is not positive definite (leave_cholmod), and come back.
   bool direct_cholmod_ = false;
   int cholmod_departures_ = 0;
-  void leave_cholmod();
   double factorisation_flops_ = 0;  // of CHOLMOD's factorisation of this pattern (0: not analysed)
   std::unique_ptr<CholeskyFactor> factor_;
   struct Worker;

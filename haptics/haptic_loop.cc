@@ -31,10 +31,10 @@ HapticLoop::HapticLoop(const HapticLoopSettings& settings, const EnvironmentUpda
   for (FrameSlot& slot : slots_) {
     slot.update = initial;
     slot.normal_force = Eigen::VectorXd::Zero(contacts_);
-    converged_force_ = slot.normal_force;
     slot.local_model = settings.local_model;
     slot.hold = settings.hold;
   }
+  converged_force_ = Eigen::VectorXd::Zero(contacts_);  // the rest state's: no force
   FrameSlot& first = slots_[newest_];
   first.gains = settings.gains;
   prepare(first);

@@ -17,13 +17,19 @@
 namespace fetouch::fem {
 namespace {
 
-// The 1D Dirichlet Laplacian tridiag(-1, d, -1) on n unknowns.
-void tridiagonal(TangentSystem& k, int n, double diagonal) {
-  std::vector<int> start{0}, columns;
+// The pattern of a tridiagonal matrix on n unknowns, in compressed sparse rows.
+void tridiagonal_pattern(int n, std::vector<int>& start, std::vector<int>& columns) {
+  start = {0}, columns.clear();
   for (int i = 0; i < n; ++i) {
     for (int j = std::max(0, i - 1); j <= std::min(n - 1, i + 1); ++j) columns.push_back(j);
     start.push_back(static_cast<int>(columns.size()));
   }
+}
+
+// The 1D Dirichlet Laplacian tridiag(-1, d, -1) on n unknowns.
+void tridiagonal(TangentSystem& k, int n, double diagonal) {
+  std::vector<int> start, columns;
+  tridiagonal_pattern(n, start, columns);
   if (k.rows() != static_cast<std::size_t>(n)) k.set_pattern(start, columns, TangentSystem::Method::factorisation, 0, n);
   k.zero();
   for (int i = 0; i < n; ++i) {
@@ -134,11 +140,8 @@ TEST(TangentSystem, ADriftedFactorisationIsReplacedFromTheBackgroundThreeFramesL
 // pattern by a factor of its own), 1 to swap_after_frames. Lockstep takes it up exactly there.
 TEST(TangentSystem, ABackgroundFactorisationIsDueAsManyFramesAfterItsRequestAsItsFlopsTake) {
   const int n = 200;
-  std::vector<int> start{0}, columns;
-  for (int i = 0; i < n; ++i) {
-    for (int j = std::max(0, i - 1); j <= std::min(n - 1, i + 1); ++j) columns.push_back(j);
-    start.push_back(static_cast<int>(columns.size()));
-  }
+  std::vector<int> start, columns;
+  tridiagonal_pattern(n, start, columns);
   const double flops = CholeskyFactor(n, start.data(), columns.data()).flops();
   ASSERT_GT(flops, 0);
   for (const auto& [per_frame, due] : std::vector<std::pair<double, int>>{
@@ -284,18 +287,18 @@ TEST(TangentSystem, AnIndefiniteKLeavesCholmodOnlyUntilTheNextPositiveDefiniteOn
   tridiagonal(k, n, 3.0);
   k.solve(b.data(), x.data(), 1e-10, true);
   EXPECT_TRUE(k.cholmod());
-  tridiagonal(k, n, 0.5);
-  k.refactor_next();
-  EXPECT_TRUE(k.solve(b.data(), x.data(), 1e-10, true).refactored);
-  EXPECT_LT(relative_residual(k, b, x), 1e-10);
-  EXPECT_FALSE(k.cholmod());
-  EXPECT_EQ(k.cholmod_departures(), 1);
-  tridiagonal(k, n, 3.0);
-  k.refactor_next();
-  EXPECT_TRUE(k.solve(b.data(), x.data(), 1e-10, true).refactored);
-  EXPECT_LT(relative_residual(k, b, x), 1e-10);
-  EXPECT_TRUE(k.cholmod());
-  EXPECT_EQ(k.cholmod_departures(), 1);
+  // K with this diagonal, factorised afresh: solved, and on CHOLMOD or not as `positive_definite`.
+  const auto refactorise = [&](double diagonal, bool positive_definite) {
+    SCOPED_TRACE(diagonal);
+    tridiagonal(k, n, diagonal);
+    k.refactor_next();
+    EXPECT_TRUE(k.solve(b.data(), x.data(), 1e-10, true).refactored);
+    EXPECT_LT(relative_residual(k, b, x), 1e-10);
+    EXPECT_EQ(k.cholmod(), positive_definite);
+    EXPECT_EQ(k.cholmod_departures(), 1);
+  };
+  refactorise(0.5, false);
+  refactorise(3.0, true);
 }
 
 // Within frames (lockstep) a factorisation due there finds K not positive definite: LDL' carries
