@@ -7,6 +7,7 @@
 #include <deal.II/lac/full_matrix.h>
 #include <deal.II/lac/vector.h>
 
+#include <utility>
 #include <vector>
 
 #include "fem/linear_system.h"
@@ -42,12 +43,32 @@ class CondensedCompliance {
                                      ComplianceTimes& times);
   // Z = K^-1 H' of the last W (empty before the first, or after clear()).
   const std::vector<dealii::Vector<double>>& columns() const { return z_; }
-  void clear() { z_.clear(), recycled_.clear(), carrier_.reinit(0); }
+  void clear() { z_.clear(), recycled_.reset(0), carrier_.reinit(0); }
   double galerkin_tolerance = kGalerkinTolerance;
 
  private:
+  // Vectors of one length side by side, column-major (n x count), so that the Galerkin algebra on
+  // them (B'K B, H B, B C) is matrix products; the storage is kept from one update to the next.
+  class Columns {
+   public:
+    void reset(std::size_t n) { n_ = n, count_ = 0; }
+    std::size_t count() const { return count_; }
+    std::size_t length() const { return n_; }
+    double* operator[](std::size_t j) { return data_.data() + j * n_; }
+    const double* operator[](std::size_t j) const { return data_.data() + j * n_; }
+    double* add();  // a new last column (its entries unset)
+    void resize(std::size_t count);
+    void swap(Columns& other) { data_.swap(other.data_), std::swap(n_, other.n_), std::swap(count_, other.count_); }
+
+   private:
+    std::vector<double> data_;
+    std::size_t n_ = 0, count_ = 0;
+  };
+
   std::vector<dealii::Vector<double>> z_;
-  std::vector<dealii::Vector<double>> recycled_;  // the last rounds' directions, newest first
+  Columns recycled_;  // the last rounds' directions, newest first
+  Columns basis_, kb_, h_, z_block_, kz_block_, kept_;  // the update's working storage
+  dealii::Vector<double> scratch_;
   dealii::Vector<double> carrier_;  // (P + c g g')^-1 g of the liquid's g, at some earlier state
   double carrier_cosine_ = 0;       // its cosine with g when it was computed
 };

@@ -140,9 +140,20 @@ void LinearSystem::multiply(const std::vector<Vector<double>>& x, std::vector<Ve
   std::vector<const double*> in(x.size());
   std::vector<double*> out(x.size());
   for (std::size_t k = 0; k < x.size(); ++k) in[k] = x[k].begin(), out[k] = y[k].begin();
-  tangent_.multiply_columns(in.data(), out.data(), static_cast<int>(x.size()));
-  if (rank_one_c_ != 0)
-    for (std::size_t k = 0; k < x.size(); ++k) y[k].add(rank_one_c_ * (*rank_one_g_ * x[k]), *rank_one_g_);
+  multiply(in.data(), out.data(), static_cast<int>(x.size()));
+}
+
+void LinearSystem::multiply(const double* const* x, double* const* y, int count) const {
+  tangent_.multiply_columns(x, y, count);
+  if (rank_one_c_ == 0) return;
+  const double* g = rank_one_g_->begin();
+  const std::size_t n = rank_one_g_->size();
+  for (int k = 0; k < count; ++k) {
+    double gx = 0;
+    for (std::size_t i = 0; i < n; ++i) gx += g[i] * x[k][i];
+    const double scale = rank_one_c_ * gx;
+    for (std::size_t i = 0; i < n; ++i) y[k][i] += scale * g[i];
+  }
 }
 
 void LinearSystem::apply_factorisation_to_rank_one_g(Vector<double>& w) {

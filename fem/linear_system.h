@@ -73,8 +73,10 @@ class LinearSystem {
   void solve(const dealii::Vector<double>& rhs, dealii::Vector<double>& x, double tolerance, bool zero_guess);
   // y = K x.
   void multiply(const dealii::Vector<double>& x, dealii::Vector<double>& y) const;
-  // y[k] = K x[k] for every k, K read once per four vectors (the compliance's columns).
+  // y[k] = K x[k] for every k, K read once per eight vectors (the compliance's columns).
   void multiply(const std::vector<dealii::Vector<double>>& x, std::vector<dealii::Vector<double>>& y) const;
+  // The same for `count` columns of rows() entries each, given by their starts.
+  void multiply(const double* const* x, double* const* y, int count) const;
   // X = P^-1 B, `columns` right-hand sides (column-major), P the factorisation.
   void apply_factorisation(const double* b, double* x, int columns);
   // w = (P + c g g')^-1 g, g the rank-one part's (set_rank_one).

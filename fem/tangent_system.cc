@@ -283,14 +283,18 @@ void TangentSystem::multiply_columns(const double* const* x, double* const* y, i
   const int* rs = row_start_.data();
   const int* cs = columns_.data();
   const double* v = values_.data();
-  for (int first = 0; first < columns; first += 4) {
+  for (int first = 0; first < columns; first += 8) {
     const double* const* xs = x + first;
     double* const* ys = y + first;
-    switch (std::min(4, columns - first)) {
+    switch (std::min(8, columns - first)) {
       case 1: multiply_pass<1>(n, rs, cs, v, xs, ys); break;
       case 2: multiply_pass<2>(n, rs, cs, v, xs, ys); break;
       case 3: multiply_pass<3>(n, rs, cs, v, xs, ys); break;
-      default: multiply_pass<4>(n, rs, cs, v, xs, ys); break;
+      case 4: multiply_pass<4>(n, rs, cs, v, xs, ys); break;
+      case 5: multiply_pass<5>(n, rs, cs, v, xs, ys); break;
+      case 6: multiply_pass<6>(n, rs, cs, v, xs, ys); break;
+      case 7: multiply_pass<7>(n, rs, cs, v, xs, ys); break;
+      default: multiply_pass<8>(n, rs, cs, v, xs, ys); break;
     }
   }
 }
