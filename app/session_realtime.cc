@@ -3,7 +3,6 @@
 
 #include <pthread.h>
 #include <sched.h>
-#include <sys/prctl.h>
 #include <time.h>
 
 #include <algorithm>
@@ -19,6 +18,7 @@
 
 #include "app/session_base.h"
 #include "app/session_rows.h"
+#include "app/haptic_schedule.h"
 #include "app/realtime_cores.h"
 #include "haptics/lock_free.h"
 
@@ -36,17 +36,6 @@ struct FrameRequest {
   std::vector<haptics::FrameEnergy> energy;  // the audit of the frame before `frame`
 };
 
-double seconds_between(const timespec& from, const timespec& to) {
-  return double(to.tv_sec - from.tv_sec) + 1e-9 * double(to.tv_nsec - from.tv_nsec);
-}
-
-void advance(timespec& t, long nanoseconds) {
-  t.tv_nsec += nanoseconds;
-  while (t.tv_nsec >= 1000000000L) t.tv_nsec -= 1000000000L, ++t.tv_sec;
-  while (t.tv_nsec < 0) t.tv_nsec += 1000000000L, --t.tv_sec;
-}
-
-constexpr long kSpinNs = 100'000;  // the haptic thread spins the last 100 us before each deadline
 constexpr double kRampOutS = 0.2;  // a stopped session's force ramps out over this time
 
 }  // namespace
@@ -92,7 +81,8 @@ SessionSummary run_realtime(haptics::Environment& environment, std::vector<std::
   std::vector<Eigen::Vector3d> points(static_cast<std::size_t>(m)), last(static_cast<std::size_t>(m));
   std::vector<Eigen::Vector3d> velocities(static_cast<std::size_t>(m));
   std::vector<DeviceSample> block(static_cast<std::size_t>(m));
-  timespec deadline = origin, now{};
+  HapticSchedule schedule(origin, period_ns);
+  timespec now{};
   double previous_start = -1;
   double paused_s = 0;  // wall-clock time spent paused, left out of the tick starts
   haptics::ServoClock* servo = nullptr;
@@ -106,7 +96,7 @@ SessionSummary run_realtime(haptics::Environment& environment, std::vector<std::
     starts[k] = seconds_between(origin, now) - paused_s;
     // On a driver's clock, a tick is late when it starts more than a period after the last one.
     lateness[k] = servo ? (previous_start < 0 ? 0 : std::max(0.0, starts[k] - previous_start - period))
-                        : seconds_between(deadline, now);
+                        : seconds_between(schedule.deadline(), now);
     previous_start = starts[k];
     if (servo && k == 0 && cores.pin_haptic()) haptic_core = cores.haptic;  // the driver's thread, on the haptic core
     if (servo && lateness[k] > 0.5 * period) tick_overruns.fetch_add(1, std::memory_order_relaxed);
@@ -165,37 +155,18 @@ SessionSummary run_realtime(haptics::Environment& environment, std::vector<std::
       haptic_done = true;
       return;
     }
-    if (cores.pin_haptic()) haptic_core = cores.haptic;
-    if (settings.realtime_priority) {
-      sched_param p{};
-      p.sched_priority = std::min(80, sched_get_priority_max(SCHED_FIFO));
-      priority_granted = pthread_setschedparam(pthread_self(), SCHED_FIFO, &p) == 0;
-    }
-    prctl(PR_SET_TIMERSLACK, 1UL, 0, 0, 0);  // wake-ups on time, not up to 50 us late
-    timespec wake{};
+    priority_granted = schedule.enter(cores, settings.realtime_priority);
+    haptic_core = schedule.core();
     for (bool more = true; more;) {
-      // Sleep to just before the deadline, then spin the last stretch: the sleep's own wake-up
-      // latency (tens of microseconds on a virtual machine) is spent spinning, not late.
-      wake = deadline;
-      advance(wake, -kSpinNs);
-      while (clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &wake, nullptr) != 0) {
-      }
-      do clock_gettime(CLOCK_MONOTONIC, &now);
-      while (seconds_between(deadline, now) < 0);
+      schedule.wait();
       if (settings.pause && settings.pause->load(std::memory_order_relaxed) &&
           !(settings.stop && settings.stop->load(std::memory_order_relaxed)) && !stopping.load(std::memory_order_relaxed)) {
-        advance(deadline, period_ns);  // paused: this period is not a tick
+        schedule.skip();  // paused: this period is not a tick
         paused_s += period;
         continue;
       }
       more = tick();
-      advance(deadline, period_ns);
-      clock_gettime(CLOCK_MONOTONIC, &now);
-      const double behind = seconds_between(deadline, now);
-      if (behind > 0) tick_overruns.fetch_add(1, std::memory_order_relaxed);
-      // More than two periods behind (the thread was descheduled): start the schedule afresh
-      // rather than run a burst of late ticks.
-      if (behind > 2 * period) deadline = now;
+      if (schedule.next() > 0) tick_overruns.fetch_add(1, std::memory_order_relaxed);
     }
     haptic_done = true;
   });

@@ -255,5 +255,23 @@ TEST_F(RunCommand, DevicesDescribesTheStandin) {
   EXPECT_EQ(j["devices"][0]["max_continuous_force_n"].as<double>(), 3.3);
 }
 
+// `fetouch devices --timing`: the real binary runs the haptic thread's schedule and reports it; no
+// libHD.so is needed for that.
+TEST_F(RunCommand, DevicesTimingReportsTheHapticSchedule) {
+  const auto r = run_command("FETOUCH_LIBHD=/nonexistent/libHD.so " + fetouch("devices --timing 0.25 --json"));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const YAML::Node j = YAML::Load(r.out);
+  EXPECT_EQ(j["ticks"].as<long>(), 250);
+  EXPECT_EQ(j["period_s"].as<double>(), 1e-3);
+  const long late = j["later_than_1ms"].as<long>(), somewhat = j["later_than_100us"].as<long>();
+  EXPECT_LE(late, somewhat);
+  EXPECT_LE(somewhat, 250);
+  EXPECT_LE(j["lateness_p99_s"].as<double>(), j["lateness_max_s"].as<double>());
+  EXPECT_EQ(late > 0, j["lateness_max_s"].as<double>() > 1e-3);
+  const auto bad = run_command(fetouch("devices --timing 0"));
+  EXPECT_NE(bad.exit_code, 0);
+  EXPECT_NE(bad.err.find("--timing"), std::string::npos) << bad.err;
+}
+
 }  // namespace
 }  // namespace fetouch::testing
