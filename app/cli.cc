@@ -97,6 +97,7 @@ int run_cli(int argc, char** argv, AddDrawingCommand add_drawing_command) {
   add_phantom_command(app, exit_code);
   add_reconstruct_command(app, exit_code);
   add_mesh_command(app, exit_code);
+  add_labels_command(app, exit_code);
   drawing("render");
   add_replay_command(app, exit_code);
   add_run_command(app, exit_code);

@@ -169,6 +169,8 @@ Mask close(const Mask& mask, int radius) {
   return morph(morph(mask, radius, true), radius, false);
 }
 
+Mask dilate(const Mask& mask, int radius) { return radius <= 0 ? mask : morph(mask, radius, true); }
+
 Mask fill_holes(const Mask& mask) {
   std::vector<std::size_t> sizes;
   std::vector<bool> touches;

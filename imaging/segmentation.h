@@ -32,6 +32,8 @@ enum class ComponentChoice { largest, largest_interior, containing_seed };
 // Throws std::runtime_error when there is no such component (an empty segmentation), naming why.
 Mask connected_component(const Mask& mask, ComponentChoice choice, std::array<int, 3> seed = {0, 0, 0});
 Mask close(const Mask& mask, int radius);
+// Dilation by a ball of `radius` voxels.
+Mask dilate(const Mask& mask, int radius);
 Mask fill_holes(const Mask& mask);
 
 // The fetus of a phantom image (or a real fetal volume of the same look): smoothing, depth

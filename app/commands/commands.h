@@ -14,6 +14,7 @@ void add_solve_command(CLI::App& parent, int& exit_code);
 void add_phantom_command(CLI::App& parent, int& exit_code);
 void add_reconstruct_command(CLI::App& parent, int& exit_code);
 void add_mesh_command(CLI::App& parent, int& exit_code);
+void add_labels_command(CLI::App& parent, int& exit_code);
 void add_render_command(CLI::App& parent, int& exit_code);
 void add_replay_command(CLI::App& parent, int& exit_code);
 void add_trajectory_command(CLI::App& parent, int& exit_code);
