@@ -110,6 +110,7 @@ int run_labels(const LabelsOptions& o) {
   const std::string extension = out.extension().string();
   if (extension != ".mha" && extension != ".vti")
     throw std::invalid_argument("--out must end in .mha or .vti (a label map `fetouch mesh` reads): " + o.out);
+  if (o.layers.size() > 255) throw std::invalid_argument("at most 255 layers (labels 1 to 255), not " + std::to_string(o.layers.size()));
   std::vector<Layer> layers;
   for (const std::string& text : o.layers) layers.push_back(parse_layer(text));
   std::vector<NamedInput> inputs;
@@ -157,6 +158,10 @@ int run_labels(const LabelsOptions& o) {
       if (masks[k].data[v] && labels.data[v] == k) labels.data[v] = static_cast<std::uint8_t>(k + 1);
   std::vector<long> counts(layers.size() + 1, 0);
   for (const std::uint8_t l : labels.data) ++counts[l];
+  for (std::size_t k = 1; k < counts.size(); ++k)  // nothing written
+    if (counts[k] == 0)
+      throw std::invalid_argument("label " + std::to_string(k) + " (" + layers[k - 1].path +
+                                  ") has no voxel inside the layer before it");
   replace_when_written(out, [&](const fs::path& temporary) { imaging::write_volume(labels, temporary); });
   const double voxel_ml = labels.spacing_mm[0] * labels.spacing_mm[1] * labels.spacing_mm[2] * 1e-3;
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
@@ -187,16 +192,10 @@ int run_labels(const LabelsOptions& o) {
     std::printf("%s: %d x %d x %d voxels of %.3g x %.3g x %.3g mm\n", out.string().c_str(), labels.dimensions[0],
                 labels.dimensions[1], labels.dimensions[2], labels.spacing_mm[0], labels.spacing_mm[1], labels.spacing_mm[2]);
     for (std::size_t k = 0; k < layers.size(); ++k)
-      std::printf("  label %zu: %s above %g, closed by %d voxels: %ld voxels, %.1f ml%s\n", k + 1, layers[k].path.c_str(),
-                  thresholds[k], layers[k].closing, counts[k + 1], counts[k + 1] * voxel_ml,
-                  counts[k + 1] == 0 ? " (empty: not inside the layer before it)" : "");
+      std::printf("  label %zu: %s above %g, closed by %d voxels: %ld voxels, %.1f ml\n", k + 1, layers[k].path.c_str(),
+                  thresholds[k], layers[k].closing, counts[k + 1], counts[k + 1] * voxel_ml);
     std::printf("  in %.1f s\n", seconds);
   }
-  for (std::size_t k = 1; k < counts.size(); ++k)
-    if (counts[k] == 0) {
-      std::cerr << "error: label " << k << " (" << layers[k - 1].path << ") has no voxel inside the layer before it\n";
-      return kExitBadInput;
-    }
   return kExitOk;
 }
 

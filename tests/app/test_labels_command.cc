@@ -102,6 +102,12 @@ TEST(LabelsCommand, LayersOnAnotherGridBadLayerKeysAndAnOutputOverALayerAreRefus
   EXPECT_EQ(r.exit_code, 2);
   EXPECT_NE(r.err.find("--out must end in .mha or .vti"), std::string::npos) << r.err;
   EXPECT_FALSE(fs::exists(dir.path() / "l.mha"));
+  const fs::path speck = dir.path() / "speck.mha";
+  write_ball(speck, {32, 32, 32}, 1.5);  // 19 voxels: smoothed at 5 mm, nothing is left above one half
+  r = run_command(fetouch("labels --smooth 5" + out + outer.string() + ":threshold=100 " + speck.string() + ":threshold=100"));
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("label 2 (" + speck.string() + ") has no voxel"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(dir.path() / "l.mha"));
   const auto before = fs::file_size(outer);
   r = run_command(fetouch("labels --out " + outer.string() + " " + outer.string()));  // the input itself
   EXPECT_EQ(r.exit_code, 2);
