@@ -288,14 +288,57 @@ std::vector<std::function<Outcome()>> Battery::cases() {
     const Point<3> a = model->solver->boundary_point_nearest(site_.point - 1.5 * site_.radius * t, false);
     const Point<3> b = model->solver->boundary_point_nearest(site_.point + 1.5 * site_.radius * t, false);
     const int pa = model->solver->add_contact_patch(a, site_.radius), pb = model->solver->add_contact_patch(b, site_.radius);
-    model->solver->set_patch_force(pa, 0.5 * f * (site_.inward + t));
-    model->solver->set_patch_force(pb, 0.5 * f * (site_.inward - t));
+    // The squeeze's stiffness: the pair's force against their approach, along t, by the condensed
+    // compliance (1 / d'W d, d the unit vector of the two patches moving towards each other).
+    const auto squeeze_stiffness = [&] {
+      const dealii::FullMatrix<double> w = model->solver->compliance();
+      std::vector<double> d(w.m(), 0.0);
+      for (int c = 0; c < 3; ++c) d[std::size_t(3 * pa + c)] = t[c] / std::sqrt(2.0), d[std::size_t(3 * pb + c)] = -t[c] / std::sqrt(2.0);
+      double wd = 0;
+      for (unsigned int i = 0; i < w.m(); ++i)
+        for (unsigned int j = 0; j < w.n(); ++j) wd += d[i] * w(i, j) * d[j];
+      return 1 / wd;
+    };
+    const double at_rest = squeeze_stiffness();
+    const auto load = [&](double factor) {
+      model->solver->set_patch_force(pa, factor * 0.5 * f * (site_.inward + t));
+      model->solver->set_patch_force(pb, factor * 0.5 * f * (site_.inward - t));
+    };
+    load(1);
     const fem::SolveReport r = model->solver->solve(settings_);
     account(r, o);
     o.converged = r.converged;
+    o.expected = "converged, or stopped at a limit point";
+    if (r.converged) {
+      o.reached = (model->solver->patch_displacement(pa) - model->solver->patch_displacement(pb)) * t;
+      inspect(*model->solver, o);
+      must_converge(o);
+      o.expected = "converged, or stopped at a limit point";
+      return o;
+    }
+    // Squeezed from both sides, the wall over the liquid can fold: past the load where it does (a
+    // limit point) no state near the last one carries more, and force control cannot go on. That
+    // is the tissue's answer, not the solver's failure, when the squeeze's stiffness at the last
+    // load reached has fallen under a quarter of its value at rest (at a limit point it tends to
+    // zero). On six fresh meshes of the default scene two reached one at 92-93 % of this load.
+    inspect(*model->solver, o);  // rolled back: the state before the solve
+    const bool rolled_back = o.finite && o.min_j > 0;
+    double reached_factor = 0;
+    for (const fem::StepReport& step : r.steps)
+      if (step.converged) reached_factor = std::max(reached_factor, step.load_factor);
+    if (reached_factor <= 0 || !rolled_back) return o;
+    load(reached_factor);
+    const fem::SolveReport again = model->solver->solve(settings_);
+    account(again, o);
+    if (!again.converged) return o;
+    const double there = squeeze_stiffness();
     o.reached = (model->solver->patch_displacement(pa) - model->solver->patch_displacement(pb)) * t;
     inspect(*model->solver, o);
-    must_converge(o);
+    char text[200];
+    std::snprintf(text, sizeof text, "; a limit point: at %.1f %% of the load the squeeze's stiffness is %.3g N/m (%.3g at rest)",
+                  100 * reached_factor, there, at_rest);
+    o.failure = r.failure + text;
+    o.sound = there < 0.25 * at_rest && o.min_j > 0 && o.finite;
     return o;
   });
   all.emplace_back([this]() {  // beyond what the tissue can take: it must fail cleanly and roll back
