@@ -131,18 +131,6 @@ void LinearSystem::solve(const Vector<double>& rhs, Vector<double>& x, double to
   constraints_.distribute(x);
 }
 
-void LinearSystem::multiply(const Vector<double>& x, Vector<double>& y) const {
-  tangent_.multiply(x.begin(), y.begin());
-  if (rank_one_c_ != 0) y.add(rank_one_c_ * (*rank_one_g_ * x), *rank_one_g_);
-}
-
-void LinearSystem::multiply(const std::vector<Vector<double>>& x, std::vector<Vector<double>>& y) const {
-  std::vector<const double*> in(x.size());
-  std::vector<double*> out(x.size());
-  for (std::size_t k = 0; k < x.size(); ++k) in[k] = x[k].begin(), out[k] = y[k].begin();
-  multiply(in.data(), out.data(), static_cast<int>(x.size()));
-}
-
 void LinearSystem::multiply(const double* const* x, double* const* y, int count) const {
   tangent_.multiply_columns(x, y, count);
   if (rank_one_c_ == 0) return;

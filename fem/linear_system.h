@@ -71,11 +71,8 @@ class LinearSystem {
   // x = K^-1 rhs to a relative residual `tolerance` (x holds the initial guess unless zero_guess),
   // constraints distributed.
   void solve(const dealii::Vector<double>& rhs, dealii::Vector<double>& x, double tolerance, bool zero_guess);
-  // y = K x.
-  void multiply(const dealii::Vector<double>& x, dealii::Vector<double>& y) const;
-  // y[k] = K x[k] for every k, K read once per eight vectors (the compliance's columns).
-  void multiply(const std::vector<dealii::Vector<double>>& x, std::vector<dealii::Vector<double>>& y) const;
-  // The same for `count` columns of rows() entries each, given by their starts.
+  // y[k] = K x[k] (K with the rank-one part) for `count` columns of rows() entries each, given by
+  // their starts; K is read once per eight of them (the compliance's columns).
   void multiply(const double* const* x, double* const* y, int count) const;
   // X = P^-1 B, `columns` right-hand sides (column-major), P the factorisation.
   void apply_factorisation(const double* b, double* x, int columns);

@@ -13,12 +13,11 @@
 #include <iostream>
 #include <sstream>
 
-#include "app/json_writer.h"
 #include "app/log.h"
-#include "app/output_guard.h"
 #include "app/progress.h"
 #include "app/scene_mesh.h"
 #include "app/scene_rig.h"
+#include "app/study/hard_cases_report.h"
 #include "app/study/study.h"
 #include "fem/fem_environment.h"
 #include "fem/material.h"
@@ -68,14 +67,6 @@ struct Site {
   double force_n = 1.5;  // a firm press: the block's 1.5 N, a scene's half its device's peak force
 };
 
-struct Outcome {
-  std::string name, expected, result, failure;
-  bool sound = false, converged = false;
-  int iterations = 0, cuts = 0, rollbacks = 0;
-  double min_j = 0, seconds = 0, reached = 0;
-  bool finite = true;
-};
-
 class Battery {
  public:
   Battery(const config::Scene& scene, bool builtin, const HardCasesOptions& o) : scene_(scene), builtin_(builtin), o_(o) {
@@ -105,33 +96,33 @@ class Battery {
   }
   const Site& site() const { return site_; }
 
-  std::vector<std::function<Outcome()>> cases();
+  std::vector<std::function<HardCaseOutcome()>> cases();
 
  private:
-  Outcome through_environment(const std::string& name, double force, bool teleport);
+  HardCaseOutcome through_environment(const std::string& name, double force, bool teleport);
   std::unique_ptr<fem::TissueModel> build(const config::Scene& scene, const Adjust& adjust) const {
     return fem::build_tissue_model(scene, adjust);
   }
   Tensor<1, 3> press(double newtons) const { return newtons * site_.inward; }
   // The soundness of the solver's state after a case: J > 0 everywhere, fields finite.
-  static void inspect(const fem::QuasiStaticSolver& solver, Outcome& o) {
+  static void inspect(const fem::QuasiStaticSolver& solver, HardCaseOutcome& o) {
     const auto fields = solver.cell_fields();
     o.min_j = fields.jacobian.empty() ? 0 : *std::min_element(fields.jacobian.begin(), fields.jacobian.end());
     o.finite = std::isfinite(solver.max_displacement()) && std::isfinite(o.min_j);
   }
-  static void account(const fem::SolveReport& r, Outcome& o) {
+  static void account(const fem::SolveReport& r, HardCaseOutcome& o) {
     o.iterations += std::max(0, r.total_iterations), o.cuts += r.cuts;
     if (!r.converged) ++o.rollbacks, o.failure = r.failure;
   }
   // The case must converge.
-  static void must_converge(Outcome& o) {
+  static void must_converge(HardCaseOutcome& o) {
     o.expected = "converged";
     o.sound = o.converged && o.min_j > 0 && o.finite;
   }
   // A patch force applied in `steps` solves (each continuing from the last).
-  Outcome pressed(const std::string& name, const config::Scene& scene, const Adjust& adjust,
+  HardCaseOutcome pressed(const std::string& name, const config::Scene& scene, const Adjust& adjust,
                   const std::function<void(fem::TissueModel&)>& after, const std::vector<double>& forces) {
-    Outcome o;
+    HardCaseOutcome o;
     o.name = name;
     auto model = build(scene, adjust);
     if (after) after(*model);
@@ -178,11 +169,11 @@ config::Scene with_material(config::Scene scene, config::MaterialModel model, do
   return scene;
 }
 
-std::vector<std::function<Outcome()>> Battery::cases() {
+std::vector<std::function<HardCaseOutcome()>> Battery::cases() {
   const double f = site_.force_n;
-  std::vector<std::function<Outcome()>> all;
+  std::vector<std::function<HardCaseOutcome()>> all;
   all.emplace_back([this]() {  // 40 % compression: the faces on the probe's side moved in by 40 % of the depth
-    Outcome o;
+    HardCaseOutcome o;
     o.name = "40 % compression";
     const Site s = site_;
     const bool from_top = s.inward[s.axis] < 0;  // the probe's side is the axis's upper end
@@ -208,7 +199,7 @@ std::vector<std::function<Outcome()>> Battery::cases() {
     return o;
   });
   all.emplace_back([this, f]() {  // pushed until 30 % of the depth, the force growing by half each solve
-    Outcome o;
+    HardCaseOutcome o;
     o.name = "probe pushed 30 % of the depth";
     auto model = build(scene_, {});
     const int patch = model->solver->add_contact_patch(site_.point, site_.radius);
@@ -271,7 +262,7 @@ std::vector<std::function<Outcome()>> Battery::cases() {
         if (flipped == 0) return;
       }
     };
-    Outcome o = pressed("sliver elements", scene_, distort, {}, {0.5 * f});
+    HardCaseOutcome o = pressed("sliver elements", scene_, distort, {}, {0.5 * f});
     char name[64];
     std::snprintf(name, sizeof name, "sliver elements (random distortion %.1f)", *used);
     o.name = name;
@@ -281,7 +272,7 @@ std::vector<std::function<Outcome()>> Battery::cases() {
     return pressed("load reversal (press, pull, press)", scene_, {}, {}, {f, -0.5 * f, f});
   });
   all.emplace_back([this, f]() {  // two probes 3 radii apart, each pressing in and towards the other
-    Outcome o;
+    HardCaseOutcome o;
     o.name = "two probes converging";
     auto model = build(scene_, {});
     const Tensor<1, 3> t = site_.tangent;
@@ -344,7 +335,7 @@ std::vector<std::function<Outcome()>> Battery::cases() {
     return o;
   });
   all.emplace_back([this]() {  // beyond what the tissue can take: it must fail cleanly and roll back
-    Outcome o;
+    HardCaseOutcome o;
     o.name = "impossible load (500 N)";
     auto model = build(scene_, {});
     const int patch = model->solver->add_contact_patch(site_.point, site_.radius);
@@ -376,8 +367,8 @@ std::vector<std::function<Outcome()>> Battery::cases() {
 // either the same press a far way across the surface (the patch follows the probe in one frame) or
 // a force far over any device's limit. The second frame must converge, or fail and hand back the
 // last good answer.
-Outcome Battery::through_environment(const std::string& name, double force, bool teleport) {
-  Outcome o;
+HardCaseOutcome Battery::through_environment(const std::string& name, double force, bool teleport) {
+  HardCaseOutcome o;
   o.name = name;
   auto model = build(scene_, {});
   model->solver->add_contact_patch(site_.point, site_.radius);
@@ -442,10 +433,10 @@ int run_study_hard_cases(const HardCasesOptions& o) {
   Battery battery(scene, builtin, o);
   const auto cases = battery.cases();
   Progress progress("study hard-cases", static_cast<long>(cases.size()), std::cerr, Progress::stderr_is_terminal());
-  std::vector<Outcome> outcomes;
+  std::vector<HardCaseOutcome> outcomes;
   for (const auto& run_case : cases) {
     const auto start = std::chrono::steady_clock::now();
-    Outcome c;
+    HardCaseOutcome c;
     try {
       c = run_case();
     } catch (const std::exception& e) {  // a case that throws is not sound, and the others still run
@@ -460,60 +451,16 @@ int run_study_hard_cases(const HardCasesOptions& o) {
     progress.update(static_cast<long>(outcomes.size()));
   }
   progress.finish();
-  bool all_sound = true;
-  StudyTable table;
-  table.columns = {"case", "expected", "sound", "converged", "newton_iterations", "cuts", "rollbacks", "min_j", "finite",
-                   "reached_m", "seconds"};
-  for (const Outcome& c : outcomes) {
-    all_sound = all_sound && c.sound;
-    const auto cell = [](std::string text) {
-      for (char& ch : text) ch = ch == ',' ? ';' : ch;
-      return text;
-    };
-    table.rows.push_back({cell(c.name), cell(c.expected), c.sound ? "1" : "0", c.converged ? "1" : "0", std::to_string(c.iterations),
-                          std::to_string(c.cuts), std::to_string(c.rollbacks), format_number(c.min_j), c.finite ? "1" : "0",
-                          format_number(c.reached), format_number(c.seconds)});
-  }
-  write_csv(table, out / "table.csv");
   const Site& site = battery.site();
-  std::ostringstream md;
-  md << "# Hard cases: " << (builtin ? "the built-in block" : scene.name) << "\n\n"
-     << (builtin ? std::string("A 10 x 8 x 5 cm block of P2 tetrahedra, neo-Hookean (E = 5 kPa, nu = 0.45), on a table.")
-                 : "Scene `" + o.scene + "`: its mesh, materials and supports.")
-     << " The probe presses at (" << site.point << ") m, inward along (" << site.inward << "), radius "
-     << site.radius << " m; the tissue's depth along axis " << "xyz"[site.axis] << " is " << site.depth << " m; a firm press is "
-     << site.force_n << " N. Newton: " << (o.no_line_search ? "**no line search**" : "line search")
-     << ", at most " << (o.max_cuts >= 0 ? o.max_cuts : 8) << " load-step cuts.\n\n"
-     << "| case | expected | result | Newton iterations | cuts | rollbacks | smallest J | NaN | time (s) | sound |\n"
-     << "|---|---|---|---|---|---|---|---|---|---|\n";
-  for (const Outcome& c : outcomes) {
-    char j[32];
-    std::snprintf(j, sizeof j, "%.3f", c.min_j);
-    char t[32];
-    std::snprintf(t, sizeof t, "%.2f", c.seconds);
-    md << "| " << c.name << " | " << c.expected << " | " << c.result << " | " << c.iterations << " | " << c.cuts << " | "
-       << c.rollbacks << " | " << j << " | " << (c.finite ? "none" : "**yes**") << " | " << t << " | "
-       << (c.sound ? "yes" : "**NO**") << " |\n";
-  }
-  md << "\n" << (all_sound ? "Every case is sound." : "**Not every case is sound.**") << "\n";
-  write_text_file(out / "report.md", md.str());
-  std::ostringstream json_text;
-  JsonWriter json(json_text);
-  json.begin_object().key("tissue").value(builtin ? std::string("block") : scene.name).key("sound").value(all_sound);
-  json.key("cases").begin_array();
-  for (const Outcome& c : outcomes)
-    json.begin_object().key("case").value(c.name).key("expected").value(c.expected).key("sound").value(c.sound)
-        .key("converged").value(c.converged).key("result").value(c.result).key("newton_iterations").value(c.iterations)
-        .key("cuts").value(c.cuts).key("rollbacks").value(c.rollbacks).key("min_j").value(c.min_j).key("finite").value(c.finite)
-        .key("seconds").value(c.seconds).end_object();
-  json.end_array().end_object();
-  json_text << "\n";
-  if (!publish_json(out, json_text.str(), o.json)) {
-    for (const Outcome& c : outcomes)
-      std::printf("%-50s %-9s %4d it %3d cuts  min J %.3f  %6.2f s  %s\n", c.name.c_str(), c.sound ? "sound" : "NOT SOUND",
-                  c.iterations, c.cuts, c.min_j, c.seconds, c.result.c_str());
-    std::printf("%s; wrote %s\n", all_sound ? "every case is sound" : "NOT every case is sound", (out / "report.md").string().c_str());
-  }
+  std::ostringstream setting;
+  setting << (builtin ? std::string("A 10 x 8 x 5 cm block of P2 tetrahedra, neo-Hookean (E = 5 kPa, nu = 0.45), on a table.")
+                      : "Scene `" + o.scene + "`: its mesh, materials and supports.")
+          << " The probe presses at (" << site.point << ") m, inward along (" << site.inward << "), radius " << site.radius
+          << " m; the tissue's depth along axis " << "xyz"[site.axis] << " is " << site.depth << " m; a firm press is "
+          << site.force_n << " N. Newton: " << (o.no_line_search ? "**no line search**" : "line search") << ", at most "
+          << (o.max_cuts >= 0 ? o.max_cuts : 8) << " load-step cuts.";
+  const bool all_sound = write_hard_cases_outputs(out, builtin ? std::string("block") : scene.name,
+                                                  builtin ? "the built-in block" : scene.name, setting.str(), outcomes, o.json);
   return all_sound ? kExitOk : kExitFailure;
 }
 
