@@ -333,7 +333,9 @@ void add_mesh_command(CLI::App& parent, int& exit_code) {
       "regions in the order given), and a report per region. With --surface conforming the label map\n"
       "itself is meshed: every region a subdomain of one CGAL mesh, each interface a smooth surface of\n"
       "its own, the curves where three regions meet kept, sizes per region (--region-size NAME=MM);\n"
-      "the report gives each surface's smoothness and distance to its labels (docs/meshing.md).\n"
+      "the report gives each surface's smoothness and distance to its labels (docs/meshing.md). Its\n"
+      "exit 0 asks the smallest dihedral angle only; the radius ratio is reported, not asked (a few\n"
+      "flat elements stay after exudation: on the phantom 6 of 31,024 under 0.1, the worst 0.06).\n"
       "Example: fetouch mesh phantom/phantom_labels.mha --labels 3 4 5 6 --size 3 --out fetus.msh\n"
       "         fetouch mesh phantom/phantom_labels.mha --regions wall=1 fluid=2 fetus=3,4,5,6 --size 4");
   cmd->add_option("volume", o->volume, "Volume (.mha, .mhd, .vti, .nrrd, .nii, .nii.gz, .hdr) or a folder with a DICOM series")
