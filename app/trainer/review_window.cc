@@ -85,6 +85,18 @@ std::vector<double> recorded_radii(const RecordingHeader& header) {
   return radii;
 }
 
+// The smooth surfaces the trainer drew over the take's anatomy (label_surfaces.h), made again from
+// the recorded scene; none where it cannot be read or has none.
+std::vector<LabelSurface> recorded_surfaces(const RecordingHeader& header, const MeshView& anatomy) {
+  try {
+    const config::Scene scene =
+        config::parse_scene(header.scene_text, header.scene_path, fs::path(header.scene_path).parent_path()).scene;
+    if (const auto labels = scene_label_map(scene)) return label_surfaces(*labels, scene.mesh.meshing.regions, anatomy);
+  } catch (const std::exception&) {
+  }
+  return {};
+}
+
 // The take's forces against time, a line per probe, the maneuvers' boundaries, the comfort limit,
 // and the time shown.
 class TakePlot : public QWidget {
@@ -196,6 +208,7 @@ ReviewTake load_review_take(const fs::path& dir, const fs::path& recording) {
   take.anatomy = read_tissue_vtu(take.anatomy_file);
   take.probe_radii_m = recorded_radii(take.recording.header);
   take.probe_radii_m.resize(take.recording.devices.size(), 5e-3);
+  take.smooth = recorded_surfaces(take.recording.header, take.anatomy);
   if (fs::exists(dir / "assessment.json")) take.scores = read_scores(dir / "assessment.json");
   if (fs::exists(dir / "coverage.png")) take.coverage_png = dir / "coverage.png";
   return take;
@@ -218,7 +231,7 @@ ReviewWindow::ReviewWindow(ReviewTake take, const ReviewOptions& options) : take
   for (vtkRenderer* r : {base.Get(), travel.Get(), press.Get()}) render_window->AddRenderer(r);
   renderer_ = base, travel_layer_ = travel, press_layer_ = press;
   vtk_widget_->setMinimumSize(560, 480);
-  view_ = std::make_unique<TissueView>(renderer_, take_.anatomy, take_.probe_radii_m);
+  view_ = std::make_unique<TissueView>(renderer_, take_.anatomy, take_.probe_radii_m, take_.smooth);
   view_->update_tissue(TissueSnapshot{}, ColourField::regions);  // at rest: the take records no tissue states
   build_paths();
   set_paths_visible(options_.paths);

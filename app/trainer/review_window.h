@@ -23,6 +23,7 @@
 #include <vector>
 
 #include "app/recording.h"
+#include "app/trainer/label_surfaces.h"
 #include "app/trainer/tissue_view.h"
 
 class QLabel;
@@ -66,6 +67,9 @@ struct ReviewTake {
   Recording recording;
   MeshView anatomy;
   std::vector<double> probe_radii_m;     // from the recorded scene (5 mm each where it cannot be read)
+  // The regions' smooth surfaces over voted regions (label_surfaces.h), from the recorded scene;
+  // none where it has none or cannot be read (the mesh's faces are drawn then).
+  std::vector<LabelSurface> smooth;
   std::optional<ReviewScores> scores;    // the exercise's, when DIR has assessment.json
   std::filesystem::path coverage_png;    // empty: none
   double duration_s = 0;

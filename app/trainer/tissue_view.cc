@@ -83,7 +83,8 @@ std::array<unsigned int, 3> facing_away(const MeshView& mesh, std::array<unsigne
 
 }  // namespace
 
-TissueView::TissueView(vtkRenderer* renderer, const MeshView& mesh, const std::vector<double>& probe_radii_m)
+TissueView::TissueView(vtkRenderer* renderer, const MeshView& mesh, const std::vector<double>& probe_radii_m,
+                       std::vector<LabelSurface> smooth)
     : renderer_(renderer), mesh_(mesh) {
   points_ = vtkSmartPointer<vtkPoints>::New();
   points_->SetDataTypeToDouble();
@@ -130,6 +131,25 @@ TissueView::TissueView(vtkRenderer* renderer, const MeshView& mesh, const std::v
       layer.cells.push_back(mesh.tetrahedron_cell[owner]);
       ++interfaces_;
     }
+  if (!smooth.empty()) {
+    // Smooth surfaces instead of the element faces: the same regions draw, each what it shares with
+    // a larger one; a triangle's stress is that of the element holding its first corner.
+    layers_.clear();
+    interfaces_ = 0;
+    embedded_ = true;
+    for (LabelSurface& surface : smooth) {
+      RegionLayer layer;
+      layer.material = surface.material;
+      const auto named = mesh.region_name.find(surface.material);
+      layer.name = named != mesh.region_name.end() ? named->second : "region " + std::to_string(surface.material);
+      layer.triangles = surface.triangles;
+      layer.across = surface.across;
+      for (const auto& t : surface.triangles) layer.cells.push_back(mesh.tetrahedron_cell[surface.tetrahedron[t[0]]]);
+      interfaces_ += surface.triangles.size();
+      layer.embedded = std::move(surface);
+      layers_.push_back(std::move(layer));
+    }
+  }
   std::sort(layers_.begin(), layers_.end(), [](const RegionLayer& x, const RegionLayer& y) { return x.material < y.material; });
   // The outer surface, oriented outwards (the element under each triangle found by its face).
   std::vector<std::array<unsigned int, 3>> outer = mesh.boundary_triangles;
@@ -177,8 +197,22 @@ TissueView::TissueView(vtkRenderer* renderer, const MeshView& mesh, const std::v
   };
   if (interfaces_ > 0) see_through(surface_actor_);
   for (RegionLayer& layer : layers_) {
-    layer.data = triangles(points_, layer.triangles);
-    layer.data->GetPointData()->SetScalars(magnitude_);
+    if (layer.embedded.points.empty()) {
+      layer.data = triangles(points_, layer.triangles);
+      layer.data->GetPointData()->SetScalars(magnitude_);
+    } else {
+      layer.points = vtkSmartPointer<vtkPoints>::New();
+      layer.points->SetDataTypeToDouble();
+      layer.points->SetNumberOfPoints(static_cast<vtkIdType>(layer.embedded.points.size()));
+      for (std::size_t i = 0; i < layer.embedded.points.size(); ++i)
+        layer.points->SetPoint(static_cast<vtkIdType>(i), layer.embedded.points[i].data());
+      layer.magnitude = vtkSmartPointer<vtkFloatArray>::New();
+      layer.magnitude->SetName("displacement_mm");
+      layer.magnitude->SetNumberOfTuples(static_cast<vtkIdType>(layer.embedded.points.size()));
+      layer.magnitude->Fill(0);
+      layer.data = triangles(layer.points, layer.triangles);
+      layer.data->GetPointData()->SetScalars(layer.magnitude);
+    }
     layer.stress = vtkSmartPointer<vtkFloatArray>::New();
     layer.stress->SetNumberOfTuples(static_cast<vtkIdType>(layer.triangles.size()));
     layer.stress->Fill(0);
@@ -244,6 +278,24 @@ void TissueView::update_tissue(const TissueSnapshot& s, ColourField field) {
   }
   points_->Modified();
   magnitude_->Modified();
+  for (RegionLayer& layer : layers_) {  // smooth surfaces: each point moves with its element (affine for P1)
+    const LabelSurface& e = layer.embedded;
+    if (e.points.empty()) continue;
+    for (std::size_t i = 0; i < e.points.size(); ++i) {
+      double p[3] = {e.points[i][0], e.points[i][1], e.points[i][2]};
+      float u[3] = {0, 0, 0};
+      if (moved)
+        for (int c = 0; c < 4; ++c) {
+          const float* node = &s.displacement[3 * std::size_t(mesh_.tetrahedra[e.tetrahedron[i]][std::size_t(c)])];
+          for (int d = 0; d < 3; ++d) u[d] += e.weights[i][std::size_t(c)] * node[d];
+        }
+      for (int d = 0; d < 3; ++d) p[d] += u[d];
+      layer.points->SetPoint(static_cast<vtkIdType>(i), p);
+      layer.magnitude->SetValue(static_cast<vtkIdType>(i), 1e3f * std::sqrt(u[0] * u[0] + u[1] * u[1] + u[2] * u[2]));
+    }
+    layer.points->Modified();
+    layer.magnitude->Modified();
+  }
   const bool stress = field == ColourField::von_mises && s.von_mises.size() == mesh_.cells;
   if (stress) {
     float top = 0;

@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "app/session.h"
+#include "app/trainer/label_surfaces.h"
 #include "app/trainer/trainer_session.h"
 
 class vtkRenderer;
@@ -34,7 +35,10 @@ enum class ColourField { displacement, von_mises, regions };
 
 class TissueView {
  public:
-  TissueView(vtkRenderer* renderer, const MeshView& mesh, const std::vector<double>& probe_radii_m);
+  // With `smooth` (label_surfaces.h), the regions draw those surfaces, carried by the mesh's
+  // displacement, instead of the element faces between regions.
+  TissueView(vtkRenderer* renderer, const MeshView& mesh, const std::vector<double>& probe_radii_m,
+             std::vector<LabelSurface> smooth = {});
   ~TissueView();
   // The tissue as the snapshot has it.
   void update_tissue(const TissueSnapshot& snapshot, ColourField field);
@@ -53,8 +57,13 @@ class TissueView {
   const std::string& region_name(std::size_t i) const { return layers_[i].name; }
   void set_region_visible(std::size_t i, bool on);
   bool region_visible(std::size_t i) const;
-  // What region i draws: its triangles (node indices) and the material across each, and the
-  // polydata as drawn (deformed points, split normals).
+  // What region i draws: its points at rest (the mesh's nodes, or a smooth surface's own), its
+  // triangles (indices into them) and the material across each, and the polydata as drawn
+  // (deformed points, split normals).
+  bool draws_label_surfaces() const { return embedded_; }
+  const std::vector<std::array<double, 3>>& region_points(std::size_t i) const {
+    return layers_[i].embedded.points.empty() ? mesh_.points : layers_[i].embedded.points;
+  }
   const std::vector<std::array<unsigned int, 3>>& region_triangles(std::size_t i) const { return layers_[i].triangles; }
   const std::vector<unsigned int>& region_across(std::size_t i) const { return layers_[i].across; }
   vtkPolyData* drawn_region(std::size_t i);
@@ -68,6 +77,9 @@ class TissueView {
     unsigned int material = 0;
     std::vector<std::array<unsigned int, 3>> triangles;
     std::vector<unsigned int> across, cells;  // per triangle: the material across, the solver's cell
+    LabelSurface embedded;                    // a smooth surface's points and their tetrahedra (or none)
+    vtkSmartPointer<vtkPoints> points;        // its deformed points (else the mesh's, shared)
+    vtkSmartPointer<vtkFloatArray> magnitude;
     vtkSmartPointer<vtkPolyData> data;
     vtkSmartPointer<vtkFloatArray> stress;
     vtkSmartPointer<vtkPolyDataNormals> normals;
@@ -87,6 +99,7 @@ class TissueView {
   std::vector<RegionLayer> layers_;
   std::vector<ProbeActors> probes_;
   std::size_t interfaces_ = 0;
+  bool embedded_ = false;
   ColourField field_ = ColourField::displacement;
   bool bar_wanted_ = true;
 };

@@ -95,6 +95,14 @@ TEST_F(TrainerWindowTest, AnAnsweredExerciseOpensItsTakeInTheReviewWindow) {
   EXPECT_EQ(r->take().recording.devices.size(), 2u);
   EXPECT_GT(r->take().duration_s, 0.5);
   EXPECT_EQ(r->take().anatomy.tetrahedra, w.session()->mesh().tetrahedra);
+  // The review draws the regions as the trainer did: the label map's smooth surfaces, made again
+  // from the recorded scene (the exercise's fetus in its drawn pose), triangle for triangle.
+  ASSERT_TRUE(w.view()->draws_label_surfaces());
+  ASSERT_EQ(r->take().smooth.size(), w.view()->regions());
+  for (std::size_t i = 0; i < w.view()->regions(); ++i) {
+    EXPECT_EQ(r->take().smooth[i].triangles, w.view()->region_triangles(i));
+    EXPECT_EQ(r->take().smooth[i].points, w.view()->region_points(i));
+  }
 }
 
 }  // namespace
