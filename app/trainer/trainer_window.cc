@@ -333,6 +333,10 @@ void TrainerWindow::tick() {
     start_pending_ = false;
     take_started_ = std::chrono::steady_clock::now(), take_images_ = figures_.ultrasound_images;
     take_renders_ = figures_.renders;
+    // The status line's rates count from here, not from before the take was built.
+    rate_from_ = take_started_;
+    rate_ticks_ = session_->monitor().ticks.load(), rate_frames_ = last_frame_, rate_images_ = figures_.ultrasound_images;
+    rate_renders_ = figures_.renders;
   }
   take_mode_verdict();
   exercise_tick();
