@@ -15,8 +15,10 @@
 #include <vtkWindowedSincPolyDataFilter.h>
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <limits>
+#include <sstream>
 #include <stdexcept>
 
 #include "app/scene_mesh.h"
@@ -280,6 +282,23 @@ std::optional<imaging::Volume<std::uint8_t>> scene_label_map(const config::Scene
   for (std::size_t i = 0; i < volume.data.size(); ++i)
     labels.data[i] = static_cast<std::uint8_t>(std::clamp(std::lround(volume.data[i]), 0L, 255L));
   return labels;
+}
+
+const std::vector<LabelSurface>& scene_label_surfaces(const config::Scene& scene, const MeshView& mesh,
+                                                      LabelSurfaceCache& cache, double& made_s) {
+  made_s = -1;
+  double coordinates = 0;
+  for (const auto& x : mesh.points) coordinates += x[0] + 2 * x[1] + 3 * x[2];
+  std::ostringstream key;
+  key.precision(17);
+  key << scene.source.string() << ' ' << mesh.points.size() << ' ' << mesh.tetrahedra.size() << ' ' << coordinates;
+  if (key.str() == cache.key) return cache.surfaces;
+  const auto start = std::chrono::steady_clock::now();
+  cache.key = key.str();
+  cache.surfaces.clear();
+  if (const auto labels = scene_label_map(scene)) cache.surfaces = label_surfaces(*labels, scene.mesh.meshing.regions, mesh);
+  made_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  return cache.surfaces;
 }
 
 void embed_points(const MeshView& mesh, const std::vector<std::array<double, 3>>& points,

@@ -52,6 +52,17 @@ std::vector<LabelSurface> label_surfaces(const imaging::Volume<std::uint8_t>& la
 // that cannot be read.
 std::optional<imaging::Volume<std::uint8_t>> scene_label_map(const config::Scene& scene);
 
+// The surfaces a scene's mesh draws (label_surfaces of scene_label_map; none where it has no label
+// map), kept in `cache` and made again only when the mesh changes (another scene, an exercise's new
+// fetus: keyed by the scene's file and the mesh's sizes and coordinates). `made_s`: the seconds it
+// took when made now, else -1. Throws as scene_label_map.
+struct LabelSurfaceCache {
+  std::string key;
+  std::vector<LabelSurface> surfaces;
+};
+const std::vector<LabelSurface>& scene_label_surfaces(const config::Scene& scene, const MeshView& mesh,
+                                                      LabelSurfaceCache& cache, double& made_s);
+
 // Per point, the tetrahedron of `mesh` that holds it (or, outside the mesh, the one nearest by
 // its barycentric coordinates) and the barycentric weights there, whose affine map it follows.
 void embed_points(const MeshView& mesh, const std::vector<std::array<double, 3>>& points,

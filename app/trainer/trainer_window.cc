@@ -230,32 +230,19 @@ void TrainerWindow::start_take(const std::optional<std::filesystem::path>& recor
   for (const auto& p : session_->scene().probes) radii.push_back(p.radius_m);
   // A mesh whose regions were voted onto its elements draws its label map's smooth surfaces, not
   // the staircase of element faces between them (label_surfaces.h).
-  // Made again when the mesh changes (another scene, an exercise's new fetus): keyed by its sizes and
-  // the sum of its coordinates.
-  double coordinates = 0;
-  for (const auto& x : session_->mesh().points) coordinates += x[0] + 2 * x[1] + 3 * x[2];
-  std::ostringstream key;
-  key.precision(17);
-  key << scene_.source.string() << ' ' << session_->mesh().points.size() << ' ' << session_->mesh().tetrahedra.size() << ' '
-      << coordinates;
-  const std::string smooth_for = key.str();
-  if (smooth_for != smooth_for_) {
-    smooth_.clear();
-    smooth_for_ = smooth_for;
-    try {
-      const auto start = std::chrono::steady_clock::now();
-      if (const auto labels = scene_label_map(scene_)) {
-        smooth_ = label_surfaces(*labels, scene_.mesh.meshing.regions, session_->mesh());
-        std::size_t triangles = 0;
-        for (const auto& s : smooth_) triangles += s.triangles.size();
-        log::info() << "the regions drawn as their label map's smooth surfaces: " << triangles << " triangles, made in "
-                    << std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count() << " s";
-      }
-    } catch (const std::exception& e) {
-      messages.push_back(std::string("the regions are drawn as the mesh has them (") + e.what() + ")");
-    }
+  std::vector<LabelSurface> smooth;
+  try {
+    double made_s = -1;
+    smooth = scene_label_surfaces(scene_, session_->mesh(), smooth_, made_s);
+    std::size_t triangles = 0;
+    for (const auto& s : smooth) triangles += s.triangles.size();
+    if (made_s >= 0 && triangles > 0)
+      log::info() << "the regions drawn as their label map's smooth surfaces: " << triangles << " triangles, made in "
+                  << made_s << " s";
+  } catch (const std::exception& e) {
+    messages.push_back(std::string("the regions are drawn as the mesh has them (") + e.what() + ")");
   }
-  view_ = std::make_unique<TissueView>(renderer_, session_->mesh(), radii, smooth_);
+  view_ = std::make_unique<TissueView>(renderer_, session_->mesh(), radii, std::move(smooth));
   imager_ = std::make_unique<UltrasoundImager>(session_->mesh().points, session_->mesh().tetrahedra, session_->mesh().material,
                                                volume_, gain_);
   force_plot_->set_series(static_cast<int>(radii.size()));

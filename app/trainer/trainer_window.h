@@ -165,8 +165,7 @@ class TrainerWindow : public QMainWindow {
   std::unique_ptr<TrainerSession> session_;
   std::unique_ptr<TissueView> view_;
   // The smooth surfaces the regions draw (label_surfaces.h), made once per scene and mesh.
-  std::vector<LabelSurface> smooth_;
-  std::string smooth_for_;
+  LabelSurfaceCache smooth_;
   std::unique_ptr<UltrasoundImager> imager_;
   std::shared_ptr<const ReferenceVolume> volume_;
   double gain_ = 1;
