@@ -275,12 +275,11 @@ std::optional<imaging::Volume<std::uint8_t>> scene_label_map(const config::Scene
   } catch (const std::exception& e) {
     throw std::runtime_error(scene.mesh.path.string() + ": " + e.what());
   }
+  meshes::MaskVolume map = label_map(volume);  // as the mesher reads it
   imaging::Volume<std::uint8_t> labels;
-  labels.dimensions = volume.dimensions, labels.spacing_mm = volume.spacing_mm;
-  labels.origin_mm = volume.origin_mm, labels.direction = volume.direction;
-  labels.data.resize(volume.data.size());
-  for (std::size_t i = 0; i < volume.data.size(); ++i)
-    labels.data[i] = static_cast<std::uint8_t>(std::clamp(std::lround(volume.data[i]), 0L, 255L));
+  labels.dimensions = map.dimensions, labels.spacing_mm = map.spacing_mm;
+  labels.origin_mm = map.origin_mm, labels.direction = map.direction;
+  labels.data = std::move(map.data);
   return labels;
 }
 

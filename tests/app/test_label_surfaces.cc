@@ -2,12 +2,16 @@
 // against closed forms: a P1 embedding carries an affine displacement exactly, and the surfaces of
 // nested balls lie on the balls, face out of their region, name the region across and are smooth.
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <cmath>
+#include <filesystem>
 #include <random>
 
 #include "app/trainer/label_surfaces.h"
+#include "config/scene_loader.h"
+#include "imaging/volume_io.h"
 #include "meshes/interface_quality.h"
 
 namespace fetouch::app::trainer {
@@ -143,6 +147,36 @@ TEST(LabelSurfaces, NestedBallsDrawSmoothSurfacesOnTheBallsFacingOutOfTheirRegio
     EXPECT_LE(angles[angles.size() / 2], 10);
     EXPECT_LE(angles[std::size_t(0.99 * double(angles.size() - 1))], 35);
   }
+}
+
+TEST(LabelSurfaces, TheLabelMapOfAVolumeSceneIsTheOneItsFileHolds) {
+  // A scene whose voted regions come from a label-map file reads that file's labels for its
+  // surfaces; one with `surface: conforming` (its interfaces are surfaces already) reads none.
+  imaging::Volume<std::uint8_t> written;
+  written.dimensions = {12, 10, 8};
+  written.spacing_mm = {1.0, 1.5, 2.0};
+  written.origin_mm = {-5, 3, 7};
+  written.data.resize(12 * 10 * 8);
+  for (std::size_t i = 0; i < written.data.size(); ++i) written.data[i] = static_cast<std::uint8_t>(i % 3);
+  const std::filesystem::path dir = std::filesystem::temp_directory_path() / ("fetouch_label_surfaces_" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir);
+  imaging::write_volume(written, dir / "labels.mha");
+  const auto scene = [&](const std::string& surface) {
+    return config::parse_scene("name: labels\nmesh:\n  volume: labels.mha\n  meshing:\n    regions: {a: [1], b: [2]}\n"
+                               "    target_size_m: 0.004\n    surface: " + surface + "\n"
+                               "materials:\n  a: {model: neo_hookean, youngs_modulus_pa: 5000, poisson_ratio: 0.45}\n"
+                               "  b: {model: neo_hookean, youngs_modulus_pa: 5000, poisson_ratio: 0.45}\n",
+                               "labels.yaml", dir)
+        .scene;
+  };
+  const auto read = scene_label_map(scene("contoured"));
+  ASSERT_TRUE(read);
+  EXPECT_EQ(read->dimensions, written.dimensions);
+  EXPECT_EQ(read->spacing_mm, written.spacing_mm);
+  EXPECT_EQ(read->origin_mm, written.origin_mm);
+  EXPECT_EQ(read->data, written.data);
+  EXPECT_FALSE(scene_label_map(scene("conforming")));
+  std::filesystem::remove_all(dir);
 }
 
 }  // namespace
