@@ -3,6 +3,7 @@
 #include "meshes/gmsh_fill.h"
 #include "meshes/mask_thickness.h"
 #include "meshes/restricted_surface.h"
+#include "meshes/surface_extraction.h"
 #include "meshes/tet_repair.h"
 
 #include <gmsh.h>
@@ -11,11 +12,8 @@
 #include <vtkCleanPolyData.h>
 #include <vtkFeatureEdges.h>
 #include <vtkFillHolesFilter.h>
-#include <vtkFlyingEdges3D.h>
 #include <vtkFloatArray.h>
 #include <vtkImageData.h>
-#include <vtkImageGaussianSmooth.h>
-#include <vtkImageResample.h>
 #include <vtkIntArray.h>
 #include <vtkMassProperties.h>
 #include <vtkPointData.h>
@@ -23,13 +21,11 @@
 #include <vtkPolyData.h>
 #include <vtkPolyDataConnectivityFilter.h>
 #include <vtkPolyDataNormals.h>
-#include <vtkQuadricDecimation.h>
 #include <vtkSmartPointer.h>
 #include <vtkStringArray.h>
 #include <vtkFieldData.h>
 #include <vtkTriangleFilter.h>
 #include <vtkUnstructuredGrid.h>
-#include <vtkWindowedSincPolyDataFilter.h>
 #include <vtkXMLUnstructuredGridWriter.h>
 
 #include <algorithm>
@@ -54,21 +50,6 @@ long open_edges(vtkPolyData* surface) {
   edges->ManifoldEdgesOff();
   edges->Update();
   return edges->GetOutput()->GetNumberOfCells();
-}
-
-// Windowed-sinc smoothing: a low-pass filter on the surface that, unlike Laplacian smoothing,
-// does not shrink it.
-vtkSmartPointer<vtkPolyData> smoothed(vtkPolyData* surface, int iterations) {
-  auto smooth = vtkSmartPointer<vtkWindowedSincPolyDataFilter>::New();
-  smooth->SetInputData(surface);
-  smooth->SetNumberOfIterations(iterations);
-  smooth->SetPassBand(0.1);
-  smooth->BoundarySmoothingOff();
-  smooth->FeatureEdgeSmoothingOff();
-  smooth->NonManifoldSmoothingOn();
-  smooth->NormalizeCoordinatesOn();
-  smooth->Update();
-  return smooth->GetOutput();
 }
 
 // The quality every mesh written with exit 0 has.
@@ -235,11 +216,9 @@ vtkSmartPointer<vtkPolyData> mask_surface(const MaskVolume& mask, const MeshingS
   // voxels so that the surface closes at the volume's faces.
   report(s, "surface extraction", 0.0);
   const double grid_mm = s.element_size_mm / (smoother ? 2 : 3);
-  std::array<double, 3> sigma{}, magnify{};
-  bool resample = false;
+  std::array<double, 3> sigma{}, magnify{};  // resampled where an axis's magnify is under 1
   for (int d = 0; d < 3; ++d) {
     magnify[d] = grid_mm > 1.2 * mask.spacing_mm[d] ? mask.spacing_mm[d] / grid_mm : 1.0;
-    resample = resample || magnify[d] < 1;
     sigma[d] = std::max(0.7, 0.5 / magnify[d]) * (smoother ? 2 : 1);  // voxels: half the new grid's spacing
   }
   const int pad = 2 + static_cast<int>(std::ceil(2 * std::max({sigma[0], sigma[1], sigma[2]})));
@@ -257,31 +236,8 @@ vtkSmartPointer<vtkPolyData> mask_surface(const MaskVolume& mask, const MeshingS
         if (mask.data[(std::size_t(k) * mask.dimensions[1] + j) * mask.dimensions[0] + i])
           values->SetValue(image->ComputePointId(std::array<int, 3>{i + pad, j + pad, k + pad}.data()), 1.0f);
   image->GetPointData()->SetScalars(values);
-  auto blur = vtkSmartPointer<vtkImageGaussianSmooth>::New();
-  blur->SetInputData(image);
-  blur->SetStandardDeviations(sigma.data());
-  blur->SetRadiusFactors(2, 2, 2);
-  vtkSmartPointer<vtkAlgorithm> field = blur;
-  if (resample) {
-    auto coarse = vtkSmartPointer<vtkImageResample>::New();
-    coarse->SetInputConnection(blur->GetOutputPort());
-    for (int d = 0; d < 3; ++d) coarse->SetAxisMagnificationFactor(d, magnify[d]);
-    coarse->SetInterpolationModeToLinear();
-    field = coarse;
-  }
-  auto contour = vtkSmartPointer<vtkFlyingEdges3D>::New();
-  contour->SetInputConnection(field->GetOutputPort());
-  contour->SetValue(0, 0.5);
-  contour->ComputeNormalsOff();
-  contour->ComputeGradientsOff();
-  contour->ComputeScalarsOff();
-  auto largest = vtkSmartPointer<vtkPolyDataConnectivityFilter>::New();
-  largest->SetInputConnection(contour->GetOutputPort());
-  largest->SetExtractionModeToLargestRegion();
-  auto clean = vtkSmartPointer<vtkCleanPolyData>::New();
-  clean->SetInputConnection(largest->GetOutputPort());
-  clean->Update();
-  if (clean->GetOutput()->GetNumberOfPolys() == 0) {
+  vtkSmartPointer<vtkPolyData> extracted = blurred_level_set(image, sigma, magnify, /*largest_only=*/true);
+  if (extracted->GetNumberOfPolys() == 0) {
     char text[300];
     std::snprintf(text, sizeof text,
                   "meshing: nothing is left of the segmentation (%.4g ml) once smoothed at the element size: no part of "
@@ -292,25 +248,14 @@ vtkSmartPointer<vtkPolyData> mask_surface(const MaskVolume& mask, const MeshingS
 
   // 2. Smoothing that does not shrink, decimation towards the element size.
   report(s, "surface clean-up", 0.15);
-  vtkSmartPointer<vtkPolyData> surface = smoothed(clean->GetOutput(), s.smoothing_iterations);
-  auto mass = vtkSmartPointer<vtkMassProperties>::New();
-  mass->SetInputData(surface);
-  mass->Update();
-  const double triangle_area = std::sqrt(3.0) / 4 * s.element_size_mm * s.element_size_mm;
-  const double wanted = std::max(200.0, mass->GetSurfaceArea() / triangle_area);
-  const double have = surface->GetNumberOfPolys();
-  if (wanted < have && !smoother) {  // the smoother surface is already on a grid near the element size
-    auto decimate = vtkSmartPointer<vtkQuadricDecimation>::New();
-    decimate->SetInputData(surface);
-    decimate->SetTargetReduction(1 - wanted / have);
-    decimate->VolumePreservationOn();
-    decimate->Update();
+  vtkSmartPointer<vtkPolyData> surface = smoothed_surface(extracted, s.smoothing_iterations);
+  if (!smoother) {  // the smoother surface is already on a grid near the element size
     // Decimation folds the surface here and there; smoothing again unfolds it (else Gmsh cannot
     // parametrise the spine's surface, and the folds make slivers).
-    vtkSmartPointer<vtkPolyData> decimated = smoothed(decimate->GetOutput(), 10);
+    vtkSmartPointer<vtkPolyData> decimated = decimated_towards(surface, s.element_size_mm, 200);
     // Quadric decimation does not keep the topology: on a folded surface (a brain's gyri) it
     // pinches edges into non-manifold ones. Then the surface stays as extracted (Gmsh remeshes it).
-    if (open_edges(decimated) == 0) surface = decimated;
+    if (decimated != surface && open_edges(decimated) == 0) surface = decimated;
   }
   // Into space: the image's index axes along its direction cosines, about its origin.
   if (mask.direction != std::array<double, 9>{1, 0, 0, 0, 1, 0, 0, 0, 1}) {

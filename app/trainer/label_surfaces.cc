@@ -1,18 +1,11 @@
 #include "app/trainer/label_surfaces.h"
 
 #include <vtkCellArray.h>
-#include <vtkCleanPolyData.h>
-#include <vtkFlyingEdges3D.h>
 #include <vtkFloatArray.h>
 #include <vtkImageData.h>
-#include <vtkImageGaussianSmooth.h>
-#include <vtkImageResample.h>
-#include <vtkMassProperties.h>
 #include <vtkPointData.h>
 #include <vtkPolyData.h>
-#include <vtkQuadricDecimation.h>
 #include <vtkSmartPointer.h>
-#include <vtkWindowedSincPolyDataFilter.h>
 
 #include <algorithm>
 #include <chrono>
@@ -23,6 +16,7 @@
 
 #include "app/scene_mesh.h"
 #include "imaging/volume_io.h"
+#include "meshes/surface_extraction.h"
 #include "meshes/tet_geometry.h"
 
 namespace fetouch::app::trainer {
@@ -30,20 +24,6 @@ namespace fetouch::app::trainer {
 namespace {
 
 using Point = std::array<double, 3>;
-
-// Windowed-sinc smoothing: low-pass, and unlike Laplacian smoothing it does not shrink the surface.
-vtkSmartPointer<vtkPolyData> smoothed(vtkPolyData* surface, int iterations) {
-  auto smooth = vtkSmartPointer<vtkWindowedSincPolyDataFilter>::New();
-  smooth->SetInputData(surface);
-  smooth->SetNumberOfIterations(iterations);
-  smooth->SetPassBand(0.1);
-  smooth->BoundarySmoothingOff();
-  smooth->FeatureEdgeSmoothingOff();
-  smooth->NonManifoldSmoothingOn();
-  smooth->NormalizeCoordinatesOn();
-  smooth->Update();
-  return smooth->GetOutput();
-}
 
 // The boundary of the voxels whose label is in `in` (index space scaled by the spacing: x = i *
 // spacing), contoured from the indicator smoothed at sigma_mm and decimated towards triangle_mm.
@@ -59,25 +39,6 @@ vtkSmartPointer<vtkPolyData> contour(const imaging::Volume<std::uint8_t>& labels
           for (int d = 0; d < 3; ++d) lo[d] = std::min(lo[d], at[d]), hi[d] = std::max(hi[d], at[d]);
         }
   if (hi[0] < 0) return nullptr;
-  // The triangles' size: settings.triangle_mm, larger where the surface would otherwise need more
-  // than max_triangles (its area estimated as a voxel face per voxel on its border: about 1.1 to 1.3
-  // times a smooth surface's); the indicator contoured on a grid of half that size.
-  long border = 0;
-  for (int k = lo[2]; k <= hi[2]; ++k)
-    for (int j = lo[1]; j <= hi[1]; ++j)
-      for (int i = lo[0]; i <= hi[0]; ++i) {
-        if (!in[labels.data[labels.index(i, j, k)]]) continue;
-        const int next[6][3] = {{i - 1, j, k}, {i + 1, j, k}, {i, j - 1, k}, {i, j + 1, k}, {i, j, k - 1}, {i, j, k + 1}};
-        for (const auto& q : next)
-          if (q[0] < 0 || q[1] < 0 || q[2] < 0 || q[0] >= n[0] || q[1] >= n[1] || q[2] >= n[2] ||
-              !in[labels.data[labels.index(q[0], q[1], q[2])]]) {
-            ++border;
-            break;
-          }
-      }
-  const double face_mm2 = std::pow(labels.voxel_volume_mm3(), 2.0 / 3.0);
-  const double area_mm2 = double(border) * face_mm2;
-  const double triangle_mm = std::max(s.triangle_mm, std::sqrt(area_mm2 / (s.max_triangles * std::sqrt(3.0) / 4)));
   // The region's box, grown by the Gaussian's reach and a layer of zeros so that the surface closes.
   std::array<int, 3> pad{}, size{};
   std::array<double, 3> sigma{};
@@ -94,53 +55,31 @@ vtkSmartPointer<vtkPolyData> contour(const imaging::Volume<std::uint8_t>& labels
   auto values = vtkSmartPointer<vtkFloatArray>::New();
   values->SetNumberOfTuples(image->GetNumberOfPoints());
   values->Fill(0);
+  // The triangles' size: settings.triangle_mm, larger where the surface would otherwise need more
+  // than max_triangles (its area estimated as a voxel face per voxel on its border: about 1.1 to 1.3
+  // times a smooth surface's).
+  long border = 0;
+  const auto outside = [&](int i, int j, int k) {
+    return i < 0 || j < 0 || k < 0 || i >= n[0] || j >= n[1] || k >= n[2] || !in[labels.data[labels.index(i, j, k)]];
+  };
   for (int k = lo[2]; k <= hi[2]; ++k)
     for (int j = lo[1]; j <= hi[1]; ++j)
       for (int i = lo[0]; i <= hi[0]; ++i)
         if (in[labels.data[labels.index(i, j, k)]]) {
           int at[3] = {i - lo[0] + pad[0], j - lo[1] + pad[1], k - lo[2] + pad[2]};
           values->SetValue(image->ComputePointId(at), 1.0f);
+          border += outside(i - 1, j, k) || outside(i + 1, j, k) || outside(i, j - 1, k) || outside(i, j + 1, k) ||
+                    outside(i, j, k - 1) || outside(i, j, k + 1);
         }
   image->GetPointData()->SetScalars(values);
-  auto blur = vtkSmartPointer<vtkImageGaussianSmooth>::New();
-  blur->SetInputData(image);
-  blur->SetStandardDeviations(sigma.data());
-  blur->SetRadiusFactors(2, 2, 2);
-  vtkSmartPointer<vtkAlgorithm> field = blur;
-  std::array<double, 3> magnify{};
+  const double area_mm2 = double(border) * std::pow(labels.voxel_volume_mm3(), 2.0 / 3.0);
+  const double triangle_mm = std::max(s.triangle_mm, std::sqrt(area_mm2 / (s.max_triangles * std::sqrt(3.0) / 4)));
+  std::array<double, 3> magnify{};  // the indicator contoured on a grid of half the triangles' size
   for (int d = 0; d < 3; ++d) magnify[d] = std::min(1.0, labels.spacing_mm[d] / (triangle_mm / 2));
-  if (*std::min_element(magnify.begin(), magnify.end()) < 1) {
-    auto coarse = vtkSmartPointer<vtkImageResample>::New();
-    coarse->SetInputConnection(blur->GetOutputPort());
-    for (int d = 0; d < 3; ++d) coarse->SetAxisMagnificationFactor(d, magnify[d]);
-    coarse->SetInterpolationModeToLinear();
-    field = coarse;
-  }
-  auto edges = vtkSmartPointer<vtkFlyingEdges3D>::New();
-  edges->SetInputConnection(field->GetOutputPort());
-  edges->SetValue(0, 0.5);
-  edges->ComputeNormalsOff();
-  edges->ComputeGradientsOff();
-  edges->ComputeScalarsOff();
-  auto clean = vtkSmartPointer<vtkCleanPolyData>::New();
-  clean->SetInputConnection(edges->GetOutputPort());
-  clean->Update();
-  if (clean->GetOutput()->GetNumberOfPolys() == 0) return nullptr;
-  vtkSmartPointer<vtkPolyData> surface = smoothed(clean->GetOutput(), 20);
-  auto mass = vtkSmartPointer<vtkMassProperties>::New();
-  mass->SetInputData(surface);
-  mass->Update();
-  const double wanted = std::max(100.0, mass->GetSurfaceArea() / (std::sqrt(3.0) / 4 * triangle_mm * triangle_mm));
-  const double have = surface->GetNumberOfPolys();
-  if (wanted < have) {
-    auto decimate = vtkSmartPointer<vtkQuadricDecimation>::New();
-    decimate->SetInputData(surface);
-    decimate->SetTargetReduction(1 - wanted / have);
-    decimate->VolumePreservationOn();
-    decimate->Update();
-    surface = smoothed(decimate->GetOutput(), 10);  // decimation folds a little here and there
-  }
-  return surface;
+  const vtkSmartPointer<vtkPolyData> extracted = meshes::blurred_level_set(image, sigma, magnify, /*largest_only=*/false);
+  if (extracted->GetNumberOfPolys() == 0) return nullptr;
+  const vtkSmartPointer<vtkPolyData> surface = meshes::smoothed_surface(extracted, 20);
+  return meshes::decimated_towards(surface, triangle_mm, 100);
 }
 
 }  // namespace
@@ -337,10 +276,11 @@ void embed_points(const MeshView& mesh, const std::vector<std::array<double, 3>>
     const auto& v = mesh.tetrahedra[t];
     const double whole = meshes::tet_signed_volume(mesh.points[v[0]], mesh.points[v[1]], mesh.points[v[2]], mesh.points[v[3]]);
     if (whole == 0) return -std::numeric_limits<double>::infinity();
-    for (int c = 0; c < 4; ++c) {
-      std::array<Point, 4> corner{mesh.points[v[0]], mesh.points[v[1]], mesh.points[v[2]], mesh.points[v[3]]};
-      corner[std::size_t(c)] = x;
-      w[std::size_t(c)] = meshes::tet_signed_volume(corner[0], corner[1], corner[2], corner[3]) / whole;
+    const std::array<Point, 4> corners{mesh.points[v[0]], mesh.points[v[1]], mesh.points[v[2]], mesh.points[v[3]]};
+    for (std::size_t c = 0; c < 4; ++c) {  // the volume with corner c moved to x, over the whole
+      std::array<Point, 4> moved = corners;
+      moved[c] = x;
+      w[c] = meshes::tet_signed_volume(moved[0], moved[1], moved[2], moved[3]) / whole;
     }
     return *std::min_element(w.begin(), w.end());
   };

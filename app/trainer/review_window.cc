@@ -30,6 +30,7 @@
 #include <yaml-cpp/yaml.h>
 
 #include <algorithm>
+#include <optional>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -70,28 +71,32 @@ ReviewScores read_scores(const fs::path& file) {
   return s;
 }
 
-// The probes' radii from the scene the take recorded (5 mm where it cannot be read: a scene
-// whose trajectory files are gone still has a take worth seeing).
-std::vector<double> recorded_radii(const RecordingHeader& header) {
-  std::vector<double> radii(header.probes.size(), 5e-3);
+// The scene the take recorded; none where it cannot be read (a scene whose trajectory files are
+// gone still has a take worth seeing).
+std::optional<config::Scene> recorded_scene(const RecordingHeader& header) {
   try {
-    const config::Scene scene =
-        config::parse_scene(header.scene_text, header.scene_path, fs::path(header.scene_path).parent_path()).scene;
-    for (std::size_t p = 0; p < radii.size(); ++p)
-      for (const config::Probe& probe : scene.probes)
-        if (probe.name == header.probes[p]) radii[p] = probe.radius_m;
+    return config::parse_scene(header.scene_text, header.scene_path, fs::path(header.scene_path).parent_path()).scene;
   } catch (const std::exception&) {
+    return std::nullopt;
   }
+}
+
+// The probes' radii from the recorded scene (5 mm where it has none or cannot be read).
+std::vector<double> recorded_radii(const RecordingHeader& header, const std::optional<config::Scene>& scene) {
+  std::vector<double> radii(header.probes.size(), 5e-3);
+  if (scene)
+    for (std::size_t p = 0; p < radii.size(); ++p)
+      for (const config::Probe& probe : scene->probes)
+        if (probe.name == header.probes[p]) radii[p] = probe.radius_m;
   return radii;
 }
 
 // The smooth surfaces the trainer drew over the take's anatomy (label_surfaces.h), made again from
-// the recorded scene; none where it cannot be read or has none.
-std::vector<LabelSurface> recorded_surfaces(const RecordingHeader& header, const MeshView& anatomy) {
+// the recorded scene; none where it has none or its volume cannot be read.
+std::vector<LabelSurface> recorded_surfaces(const std::optional<config::Scene>& scene, const MeshView& anatomy) {
   try {
-    const config::Scene scene =
-        config::parse_scene(header.scene_text, header.scene_path, fs::path(header.scene_path).parent_path()).scene;
-    if (const auto labels = scene_label_map(scene)) return label_surfaces(*labels, scene.mesh.meshing.regions, anatomy);
+    if (scene)
+      if (const auto labels = scene_label_map(*scene)) return label_surfaces(*labels, scene->mesh.meshing.regions, anatomy);
   } catch (const std::exception&) {
   }
   return {};
@@ -206,9 +211,10 @@ ReviewTake load_review_take(const fs::path& dir, const fs::path& recording) {
   }
   if (!any) throw std::runtime_error(take.recording_file.string() + ": the recording has no probe samples: nothing to review");
   take.anatomy = read_tissue_vtu(take.anatomy_file);
-  take.probe_radii_m = recorded_radii(take.recording.header);
+  const std::optional<config::Scene> scene = recorded_scene(take.recording.header);
+  take.probe_radii_m = recorded_radii(take.recording.header, scene);
   take.probe_radii_m.resize(take.recording.devices.size(), 5e-3);
-  take.smooth = recorded_surfaces(take.recording.header, take.anatomy);
+  take.smooth = recorded_surfaces(scene, take.anatomy);
   if (fs::exists(dir / "assessment.json")) take.scores = read_scores(dir / "assessment.json");
   if (fs::exists(dir / "coverage.png")) take.coverage_png = dir / "coverage.png";
   return take;

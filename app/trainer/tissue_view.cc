@@ -113,7 +113,7 @@ TissueView::TissueView(vtkRenderer* renderer, const MeshView& mesh, const std::v
       auto [at, fresh] = first_holder.emplace(key, t);
       if (fresh) continue;
       const std::size_t other = at->second;
-      if (mesh.material[other] == mesh.material[t]) continue;
+      if (!smooth.empty() || mesh.material[other] == mesh.material[t]) continue;  // smooth surfaces draw instead
       const std::size_t owner = owns(mesh.material[t], mesh.material[other]) ? t : other;
       const std::size_t across = owner == t ? other : t;
       const unsigned int m = mesh.material[owner];
@@ -134,8 +134,6 @@ TissueView::TissueView(vtkRenderer* renderer, const MeshView& mesh, const std::v
   if (!smooth.empty()) {
     // Smooth surfaces instead of the element faces: the same regions draw, each what it shares with
     // a larger one; a triangle's stress is that of the element holding its first corner.
-    layers_.clear();
-    interfaces_ = 0;
     embedded_ = true;
     for (LabelSurface& surface : smooth) {
       RegionLayer layer;
