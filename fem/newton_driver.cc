@@ -294,6 +294,16 @@ SolveReport NewtonDriver::solve(const NewtonSettings& s, const Predictor& predic
   std::vector<std::pair<double, Vector<double>>> path;  // (load factor, converged u), newest last
   double reference_per_load = -1;
   bool extrapolate = true;
+  // A snap: past a point where the tissue loses its stability (a wall folding between two probes)
+  // the state at a little more load lies far from the last one, and no smaller step avoids the
+  // jump; Newton gets there, but in more iterations than a step is given (48 in one step where the
+  // steps of 25 each failed, two probes on the anatomy with 4 mm elements under them). So once the
+  // cuts are spent on a step that ran out of iterations, that step is tried once more with four
+  // times the iterations. Not in a frame, whose time is bounded (it keeps its last good state), nor
+  // when cuts are off (`--max-cuts 0` breaks the solver on purpose).
+  NewtonSettings longer = s;
+  longer.max_iterations = 4 * s.max_iterations;
+  bool snap = false, snap_tried = false;
   while (done < 1 - 1e-12) {
     const double target = std::min(1.0, done + increment);
     Vector<double> last_good = u_;
@@ -301,7 +311,9 @@ SolveReport NewtonDriver::solve(const NewtonSettings& s, const Predictor& predic
     const bool extrapolated = extrapolate && !predict && !path.empty() && reference_per_load > 0;
     if (extrapolated) extrapolate_path(path, done, target);
     const double reference = predict ? predictor(u_) : extrapolated ? reference_per_load * (target - done) : -1;
-    StepReport step = newton(target, s, reference, handover_error, frame && s.load_steps <= 1);
+    StepReport step = newton(target, snap ? longer : s, reference, handover_error, frame && s.load_steps <= 1);
+    const bool exhausted = !step.converged && step.iterations >= (snap ? longer : s).max_iterations;
+    snap = false;
     report.carried = report.carried || step.carried;
     report.total_iterations += static_cast<int>(step.residuals.size()) - 1;
     const bool ok = step.converged;
@@ -325,6 +337,10 @@ SolveReport NewtonDriver::solve(const NewtonSettings& s, const Predictor& predic
       continue;
     }
     tangent.refactor_next();  // the retry starts from a state the factorisation may not fit
+    if (report.cuts == s.max_cuts && exhausted && !snap_tried && !frame && s.max_cuts > 0) {
+      snap = snap_tried = true;  // the same step, once, with the longer budget
+      continue;
+    }
     if (++report.cuts > s.max_cuts) {
       u_ = initial;  // and the whole solve: the state stays the last converged one
       set_unknowns(initial_unknowns);

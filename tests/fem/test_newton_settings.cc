@@ -6,6 +6,8 @@
 
 #include <algorithm>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include "config/scene_loader.h"
 #include "fem/tissue_model.h"
@@ -83,6 +85,51 @@ TEST(NewtonSettings, MaxLoadStepCutsBoundsTheHalvings) {
   const SolveReport many = solve("{newton: {max_iterations: 2, max_load_step_cuts: 12}}");
   EXPECT_TRUE(many.converged) << many.failure;
   EXPECT_GT(many.cuts, 0);
+}
+
+// Once the cuts are spent on a step that ran out of iterations, that step is tried once more with
+// four times the iterations (a snap past a loss of stability cannot be cut away: docs/solver.md).
+// Three iterations are too few for the press in one step or in two; twelve carry its first half.
+TEST(NewtonSettings, AStepWhoseCutsAreSpentIsTriedOnceWithFourTimesTheIterations) {
+  const auto attempts = [](const SolveReport& r) {
+    std::vector<std::pair<double, int>> tried;  // load factor, iterations taken
+    for (const StepReport& step : r.steps) tried.emplace_back(step.load_factor, int(step.residuals.size()) - 1);
+    return tried;
+  };
+  const auto reference = model(block("{newton: {max_iterations: 25}}"));
+  ASSERT_TRUE(reference->solver->solve(reference->newton).converged);
+  const double answer = reference->solver->max_displacement();
+
+  const auto m = model(block("{newton: {max_iterations: 3, max_load_step_cuts: 1}}"));
+  const SolveReport r = m->solver->solve(m->newton);
+  const auto tried = attempts(r);
+  ASSERT_GE(tried.size(), 3u) << r.failure;
+  EXPECT_EQ(tried[0], std::make_pair(1.0, 3));  // the whole load: failed
+  EXPECT_EQ(tried[1], std::make_pair(0.5, 3));  // half of it: failed, the one cut spent
+  EXPECT_EQ(tried[2].first, 0.5);               // half again, with up to 12 iterations
+  EXPECT_GT(tried[2].second, 3);
+  EXPECT_LE(tried[2].second, 12);
+  EXPECT_TRUE(r.steps[2].converged);
+  ASSERT_TRUE(r.converged) << r.failure;  // the second half then converges from the first's path
+  EXPECT_EQ(r.cuts, 1);
+  EXPECT_NEAR(m->solver->max_displacement(), answer, 1e-7 * answer);
+
+  // Only once: with two iterations the second half fails as well, and that ends the solve.
+  const SolveReport two = solve("{newton: {max_iterations: 2, max_load_step_cuts: 1}}");
+  const auto tried_two = attempts(two);
+  ASSERT_GE(tried_two.size(), 4u) << two.failure;
+  EXPECT_EQ(tried_two[2].first, 0.5);
+  EXPECT_GT(tried_two[2].second, 2);
+  EXPECT_LE(tried_two[2].second, 8);
+  for (std::size_t k = 3; k < tried_two.size(); ++k) EXPECT_LE(tried_two[k].second, 2) << "attempt " << k;
+  EXPECT_FALSE(two.converged);
+  EXPECT_EQ(two.cuts, 2);
+  EXPECT_NE(two.failure.find("after 1 cuts"), std::string::npos) << two.failure;
+
+  // With the cuts off there is no second try.
+  const SolveReport off = solve("{newton: {max_iterations: 3, max_load_step_cuts: 0}}");
+  EXPECT_EQ(off.steps.size(), 1u);
+  EXPECT_FALSE(off.converged);
 }
 
 TEST(NewtonSettings, LineSearchTamesTheFullStepsThatOvershoot) {
