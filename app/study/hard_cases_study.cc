@@ -339,14 +339,14 @@ std::vector<std::function<HardCaseOutcome()>> Battery::cases() {
     if (!eased.converged) return o;
     const double eased_approach = (model->solver->patch_displacement(pa) - model->solver->patch_displacement(pb)) * t;
     const double by_differences = eps * std::sqrt(2.0) / (o.reached - eased_approach);
-    const bool limit = there < 0.25 * at_rest && by_differences < 0.25 * at_rest;
+    const bool lost = there < 0.25 * at_rest && by_differences < 0.25 * at_rest;
     char text[320];
     std::snprintf(text, sizeof text,
                   "; %s: at %.1f %% of the load the squeeze's stiffness is %.3g N/m (%.3g by finite differences; %.3g at rest%s)",
-                  limit ? "stability lost" : "no loss of stability shown", 100 * reached_factor, there, by_differences, at_rest,
-                  limit ? "" : "; a loss asks under a quarter of it");
+                  lost ? "stability lost" : "no loss of stability shown", 100 * reached_factor, there, by_differences, at_rest,
+                  lost ? "" : "; a loss asks under a quarter of it");
     o.failure = r.failure + text;
-    o.sound = limit && o.min_j > 0 && o.finite;
+    o.sound = lost && o.min_j > 0 && o.finite;
     return o;
   });
   all.emplace_back([this]() {  // beyond what the tissue can take: it must fail cleanly and roll back
