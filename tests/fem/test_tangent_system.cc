@@ -11,6 +11,10 @@
 #include <utility>
 #include <vector>
 
+#include <petscsys.h>
+
+#include <stdexcept>
+
 #include "fem/cholesky_factor.h"
 #include "fem/tangent_system.h"
 
@@ -276,6 +280,44 @@ TEST(TangentSystem, IndefiniteMatrixFallsBackToLdl) {
   std::vector<double> b(n, 1.0), x(n);
   k.solve(b.data(), x.data(), 1e-10, true);
   EXPECT_LT(relative_residual(k, b, x), 1e-10);
+}
+
+// A singular K that is also indefinite, so that CHOLMOD cannot take it: tridiag(-1, 0.5, -1) on
+// 49 unknowns (eigenvalues of both signs) and a 50th unknown with no stiffness at all (a zero row,
+// as a dof that nothing holds). It is factorised by MUMPS's LDL' with the null pivot fixed, and a
+// right-hand side it can balance (0 on that unknown) is solved: K x = b to the tolerance. Without
+// the null-pivot detection (ICNTL(24) = 0) the factorisation fails as singular, as every cut of a
+// Newton step at such a state did (docs/solver.md).
+TEST(TangentSystem, ASingularKIsFactorisedWithItsNullPivotsFixed) {
+  const int n = 50;
+  const auto held_by_nothing = [&](TangentSystem& k) {
+    tridiagonal(k, n, 0.5);
+    k.zero();
+    for (int i = 0; i + 1 < n; ++i) {
+      k.add(i, i, 0.5);
+      if (i > 0) k.add(i, i - 1, -1);
+      if (i + 2 < n) k.add(i, i + 1, -1);
+    }
+    k.finish(std::vector<bool>(n, false));
+  };
+  std::vector<double> b(n, 0.0), x(n);
+  for (int i = 0; i + 1 < n; ++i) b[i] = std::cos(0.3 * i);
+  {
+    TangentSystem k;
+    held_by_nothing(k);
+    std::fill(x.begin(), x.end(), 0.0);
+    EXPECT_NO_THROW(k.solve(b.data(), x.data(), 1e-10, true));
+    EXPECT_FALSE(k.cholmod());
+    EXPECT_LT(relative_residual(k, b, x), 1e-10);
+  }
+  ASSERT_EQ(PetscOptionsSetValue(nullptr, "-mat_mumps_icntl_24", "0"), 0);
+  {
+    TangentSystem k;
+    held_by_nothing(k);
+    std::fill(x.begin(), x.end(), 0.0);
+    EXPECT_THROW(k.solve(b.data(), x.data(), 1e-10, true), std::runtime_error);
+  }
+  ASSERT_EQ(PetscOptionsClearValue(nullptr, "-mat_mumps_icntl_24"), 0);
 }
 
 // A K that is not positive definite is factorised by LDL' for as long as K stays so, not for the rest
