@@ -188,8 +188,8 @@ void TangentSystem::create_solver(const char* type) {
     check(PCSetType(p.pc, PCCHOLESKY), "choosing Cholesky");
     check(PCFactorSetMatSolverType(p.pc, type), "choosing the factorisation");
     solver_type_ = type;
-    // MUMPS with its null-pivot detection (ICNTL(24) = 1; the threshold, CNTL(3), at its default:
-    // pivots under about 1e-5 machine epsilon of K's norm): a tangent that is singular, not only
+    // MUMPS with its null-pivot detection (ICNTL(24) = 1; the threshold, CNTL(3), left at MUMPS's
+    // default, which scales with machine precision and K's norm): a tangent that is singular, not only
     // indefinite, is factorised with its null pivots fixed, so that Newton goes on where K has a
     // zero mode. Without it such a K failed every cut of its step, the state being the same: on a
     // fresh mesh of the default scene (CI, 2026-11-30) the teleported probe's frame, at a state
