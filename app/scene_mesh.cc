@@ -29,9 +29,10 @@ namespace {
 
 // The mesher's revision: raised whenever the same volume and options give a different mesh (2: the
 // boundary moved out to the segmented volume, regions by their labels' cover; 3: CGAL's restricted
-// Delaunay surface filled by HXT first), so that a mesh cached by an older Fetouch is made again. The
+// Delaunay surface filled by HXT first; 4: Gmsh's Delaunay mesher before HXT, so that the same scene
+// meshes the same on every machine), so that a mesh cached by an older Fetouch is made again. The
 // conforming mesher is a surface of its own in the key, and per-region sizes are added only when given.
-constexpr int kMesherRevision = 3;
+constexpr int kMesherRevision = 4;
 
 // What decides the mesh: the mesher's revision, the volume (path, size, modification time) and
 // every meshing option.

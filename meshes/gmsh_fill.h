@@ -11,12 +11,23 @@
 
 namespace fetouch::meshes {
 
-enum class FillPath {
-  remeshed_hxt,     // the surface split into patches Gmsh parametrises and remeshes at the size; HXT
-  surface_hxt,      // the surface's own triangles kept; HXT
-  restricted_hxt    // a restricted Delaunay surface (meshes/restricted_surface.h), kept; HXT
+// The surface the tetrahedra fill.
+enum class FillSurface {
+  remeshed,    // the surface split into patches Gmsh parametrises and remeshes at the size
+  as_given,    // the surface's own triangles kept
+  restricted   // a restricted Delaunay surface (meshes/restricted_surface.h), kept
 };
-const char* describe(FillPath path);
+// Gmsh's volume mesher. Its Delaunay mesher gives the same mesh of the same surface in every
+// process; HXT does not (it numbers the surface's nodes in the order of their addresses in memory,
+// docs/meshing.md), so Delaunay is tried first and HXT where Delaunay misses the angle asked.
+enum class FillMesher { delaunay, hxt };
+struct FillPath {
+  FillSurface surface;
+  FillMesher mesher;
+};
+// Delaunay, then HXT, on one surface.
+std::vector<FillPath> fill_paths(FillSurface surface);
+std::string describe(FillPath path);
 
 struct GmshFill {
   std::vector<Point3> nodes_m;

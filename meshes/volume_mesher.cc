@@ -121,6 +121,13 @@ std::string finish(VolumeMesh& mesh, const MeshingSettings& s) {
 
 namespace {
 
+// The surface remeshed, then as it is; each with Delaunay, then HXT.
+std::vector<FillPath> surface_then_given() {
+  std::vector<FillPath> paths = fill_paths(FillSurface::remeshed);
+  for (const FillPath& p : fill_paths(FillSurface::as_given)) paths.push_back(p);
+  return paths;
+}
+
 // Orients, checks (and where it can, repairs) a triangle surface in millimetres, and fills it with
 // tetrahedra (metres).
 VolumeMesh fill_surface(vtkSmartPointer<vtkPolyData> surface, const MeshingSettings& s, VolumeMesh out,
@@ -359,19 +366,19 @@ VolumeMesh mesh_mask(const MaskVolume& mask, const MeshingSettings& s) {
         surface = restricted_delaunay_surface(mask, at, &pieces);
       } catch (const std::exception& e) {  // no surface: a finer one would not have one either
         failures = e.what();
-        attempts.push_back(describe(FillPath::restricted_hxt) + std::string(": failed: ") + e.what());
+        attempts.push_back("CGAL restricted Delaunay surface: failed: " + std::string(e.what()));
         break;
       }
       surface_seconds += seconds_since(phase);
       phase = std::chrono::steady_clock::now();
-      VolumeMesh mesh = fill_surface(surface, s, out, {FillPath::restricted_hxt}, name);
+      VolumeMesh mesh = fill_surface(surface, s, out, fill_paths(FillSurface::restricted), name);
       if (pieces > 1)
         mesh.attempts.back() += " (the blurred segmentation fell into " + std::to_string(pieces) + " pieces; the largest meshed)";
       attempts.insert(attempts.end(), mesh.attempts.begin(), mesh.attempts.end());
       if (!have || better(mesh, best)) best = std::move(mesh), have = true;
     } catch (const std::exception& e) {
       failures += (failures.empty() ? "" : "; ") + std::string(name) + e.what();
-      attempts.push_back(name + std::string(describe(FillPath::restricted_hxt)) + ": failed: " + e.what());
+      attempts.push_back(name + std::string("CGAL restricted Delaunay surface: failed: ") + e.what());
     }
     fill_seconds += seconds_since(phase);
     if (have && best.quality_met) return done();
@@ -391,8 +398,7 @@ VolumeMesh mesh_mask(const MaskVolume& mask, const MeshingSettings& s) {
     phase = std::chrono::steady_clock::now();
     try {
       VolumeMesh mesh = fill_surface(surface, s, out,
-                                     smoother ? std::vector<FillPath>{FillPath::remeshed_hxt}
-                                              : std::vector<FillPath>{FillPath::remeshed_hxt, FillPath::surface_hxt},
+                                     smoother ? fill_paths(FillSurface::remeshed) : surface_then_given(),
                                      smoother ? "smoother surface, " : "");
       attempts.insert(attempts.end(), mesh.attempts.begin(), mesh.attempts.end());
       if (!have || better(mesh, best)) best = std::move(mesh), have = true;
@@ -415,7 +421,7 @@ VolumeMesh mesh_triangle_surface(const std::vector<Point3>& nodes_mm, const std:
         throw std::runtime_error("meshing: a triangle refers to node " + std::to_string(v) + " of " +
                                  std::to_string(nodes_mm.size()));
   if (triangles.empty()) throw std::runtime_error("meshing: the surface has no triangle");
-  VolumeMesh mesh = fill_surface(triangle_surface(nodes_mm, triangles), s, VolumeMesh{}, {FillPath::remeshed_hxt, FillPath::surface_hxt}, "");
+  VolumeMesh mesh = fill_surface(triangle_surface(nodes_mm, triangles), s, VolumeMesh{}, surface_then_given(), "");
   report(s, "done", 1.0);
   return mesh;
 }

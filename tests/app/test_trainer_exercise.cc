@@ -298,7 +298,7 @@ TEST(TrainerExercise, AGoodTakeScoresRightAndABadOneIsScoredDownWhereItFailed) {
                             config::to_string(pose.back);
   // FETOUCH_EXERCISE_PICTURES=DIR: the good take's steps pictured there (docs/trainer.md's walkthrough).
   const char* pictures = std::getenv("FETOUCH_EXERCISE_PICTURES");
-  const TakeResult good = run_take(dir / "good", 14, 300, false, right, 0, pictures ? pictures : "");
+  const TakeResult good = run_take(dir / "good", 12, 300, false, right, 0, pictures ? pictures : "");
   ASSERT_EQ(good.exit_code, 0) << good.err;
   const YAML::Node& a = good.assessment;
   for (const auto& answer : a["answers"]) EXPECT_EQ(answer["score"].as<double>(), 1) << answer["asked"].as<std::string>();
@@ -314,7 +314,7 @@ TEST(TrainerExercise, AGoodTakeScoresRightAndABadOneIsScoredDownWhereItFailed) {
   const std::string wrong = std::string(config::to_string(pose.lie)) + "," +
                             (pose.presentation == config::FetalPresentation::cephalic ? "breech" : "cephalic") + "," +
                             config::to_string(pose.back);
-  const TakeResult bad = run_take(dir / "bad", 27, 1500, true, wrong, 1.3 * good_force);
+  const TakeResult bad = run_take(dir / "bad", 33, 1500, true, wrong, 1.3 * good_force);
   ASSERT_EQ(bad.exit_code, 0) << bad.err;
   const YAML::Node& b = bad.assessment;
   EXPECT_EQ(b["answers"][0]["score"].as<double>(), 1);
@@ -328,7 +328,7 @@ TEST(TrainerExercise, AGoodTakeScoresRightAndABadOneIsScoredDownWhereItFailed) {
   EXPECT_FALSE(b["maneuvers"][3]["zones_touched"][1].as<bool>());
   EXPECT_GT(b["largest_force_n"].as<double>(), 1.3 * good_force);
   EXPECT_GT(b["time_over_limit_s"].as<double>(), 0.05);
-  EXPECT_LT(b["covered_share"].as<double>(), 0.75 * good_cover);
+  EXPECT_LT(b["covered_share"].as<double>(), 0.8 * good_cover);
   std::printf("bad take: largest force %.2f N, %.2f s above %.2f N, covered %.0f %%\n", b["largest_force_n"].as<double>(),
               b["time_over_limit_s"].as<double>(), 1.3 * good_force, 100 * b["covered_share"].as<double>());
   if (!HasFailure() && !std::getenv("FETOUCH_KEEP_EXERCISE")) fs::remove_all(dir);  // else kept for a look: the takes, their scenes and scripts
