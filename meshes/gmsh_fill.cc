@@ -231,9 +231,9 @@ GmshFill gmsh_fill(const std::vector<double>& nodes_mm, const std::vector<std::s
   // fetus the Delaunay mesher without it left slivers of 1.3 degrees, HXT with the default threshold
   // 9.3; with it, Delaunay 18.5 degrees at 8 mm (2026-11-30).
   gmsh::option::setNumber("Mesh.Algorithm3D", path.mesher == FillMesher::delaunay ? 1 : 10);
-  // A restricted Delaunay surface's triangles are good (angles of 25 degrees and more): HXT's own
-  // threshold (0.3) leaves no sliver the repair cannot mend, and 0.5 took ten times as long on a
-  // head (5.6 s against 0.5 s at 8 mm).
+  // A restricted Delaunay surface's triangles are good (angles of 25 degrees and more): a threshold
+  // of 0.3 (HXT's own) left no sliver the repair cannot mend, and 0.5 took ten times as long on a
+  // head (5.6 s against 0.5 s at 8 mm; measured with HXT).
   gmsh::option::setNumber("Mesh.OptimizeThreshold", path.surface == FillSurface::restricted ? 0.3 : 0.5);
   try {
     gmsh::model::mesh::generate(2);
@@ -242,7 +242,7 @@ GmshFill gmsh_fill(const std::vector<double>& nodes_mm, const std::vector<std::s
     check_surface_mesh();
     gmsh::model::mesh::generate(3);
     extract_tetrahedra(out);
-    // Gmsh's optimisers only where HXT left elements under the angle asked (on a surface of good
+    // Gmsh's optimisers only where the mesher left elements under the angle asked (on a surface of good
     // triangles it rarely does, and on two million elements they take longer than the mesh; the
     // sliver repair takes the rest).
     double worst = 180;
