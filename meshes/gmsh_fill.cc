@@ -159,11 +159,17 @@ std::vector<FillPath> fill_paths(FillSurface surface) {
   return {{surface, FillMesher::delaunay}, {surface, FillMesher::hxt}};
 }
 
+const char* describe(FillSurface surface) {
+  switch (surface) {
+    case FillSurface::remeshed: return "surface remeshed by Gmsh";
+    case FillSurface::as_given: return "surface as extracted";
+    case FillSurface::restricted: return "CGAL restricted Delaunay surface";
+  }
+  return "";
+}
+
 std::string describe(FillPath path) {
-  const char* surface = path.surface == FillSurface::remeshed ? "surface remeshed by Gmsh"
-                        : path.surface == FillSurface::as_given ? "surface as extracted"
-                                                                : "CGAL restricted Delaunay surface";
-  return std::string(surface) + (path.mesher == FillMesher::delaunay ? ", Delaunay" : ", HXT");
+  return std::string(describe(path.surface)) + (path.mesher == FillMesher::delaunay ? ", Delaunay" : ", HXT");
 }
 
 GmshFill gmsh_fill(const std::vector<double>& nodes_mm, const std::vector<std::size_t>& triangles,

@@ -27,6 +27,7 @@ struct FillPath {
 };
 // Delaunay, then HXT, on one surface.
 std::vector<FillPath> fill_paths(FillSurface surface);
+const char* describe(FillSurface surface);
 std::string describe(FillPath path);
 
 struct GmshFill {

@@ -366,7 +366,7 @@ VolumeMesh mesh_mask(const MaskVolume& mask, const MeshingSettings& s) {
         surface = restricted_delaunay_surface(mask, at, &pieces);
       } catch (const std::exception& e) {  // no surface: a finer one would not have one either
         failures = e.what();
-        attempts.push_back("CGAL restricted Delaunay surface: failed: " + std::string(e.what()));
+        attempts.push_back(describe(FillSurface::restricted) + std::string(": failed: ") + e.what());
         break;
       }
       surface_seconds += seconds_since(phase);
@@ -378,7 +378,7 @@ VolumeMesh mesh_mask(const MaskVolume& mask, const MeshingSettings& s) {
       if (!have || better(mesh, best)) best = std::move(mesh), have = true;
     } catch (const std::exception& e) {
       failures += (failures.empty() ? "" : "; ") + std::string(name) + e.what();
-      attempts.push_back(name + std::string("CGAL restricted Delaunay surface: failed: ") + e.what());
+      attempts.push_back(name + std::string(describe(FillSurface::restricted)) + ": failed: " + e.what());
     }
     fill_seconds += seconds_since(phase);
     if (have && best.quality_met) return done();
