@@ -11,8 +11,10 @@
 // assemble the two halves of this rank's cells on either side of a plane, each straight into the
 // shared residual and tangent: a cell is given to a thread only if none of its dofs is touched by
 // the other half, so no two threads ever write the same row; the cells along the cut (a layer, a
-// few percent of them) follow on one thread. The order of every sum is fixed by the mesh: results
-// are reproducible run to run.
+// few percent of them) follow on one thread. One thread (set_threads(1), or while a background
+// factorisation holds the other core) takes the two halves in turn and then the cut: each row's sum
+// is over the same cells in the same order either way, so the result is the same to the bit on one
+// thread or two, and reproducible run to run.
 #pragma once
 
 #include <array>
@@ -60,7 +62,7 @@ class ElasticityTerm final : public Term {
   bool mean_dilatation_ = false;
   unsigned int threads_ = 2;
   // The first thread's cells, the second's, and those along the cut (after both); the first holds
-  // every cell when one thread assembles. Built on first use.
+  // every cell below 2 kCellsPerThread cells and in parallel runs. Built on first use.
   mutable std::array<std::vector<unsigned int>, 3> plan_;
   mutable bool planned_ = false;
 };

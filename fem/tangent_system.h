@@ -122,11 +122,16 @@ class TangentSystem {
   // F the flops of one factorisation of this pattern (CHOLMOD's symbolic analysis, on any number of
   // ranks, so that every rank count keeps one schedule), at least 1 and at most swap_after_frames;
   // swap_after_frames itself for patterns over background_analysed_rows rows or with
-  // background_flops_per_frame 0. The default, 10^9, is a 20 Hz frame's time at the 20 GFlop/s this
-  // 2-core VM's one core factorises at (the anatomy at 8 mm: 5 x 10^8 flops, 22 ms): a
-  // factorisation that fits in a frame is taken up at the next, not left stale for three.
+  // background_flops_per_frame 0. The default, 4 x 10^8, is 20 ms at the 20 GFlop/s this 2-core
+  // VM's one core factorises at: the compute of a frame that asks for a factorisation (one Newton
+  // iteration and a compliance update, 15-25 ms on the anatomy), which is all the worker gets where
+  // frames follow each other at once (lockstep replays, studies). Real time gives it the whole 50 ms
+  // period, so it is ready there either way; lockstep, which waits for it, waited 10-15 ms in every
+  // other slow frame with 10^9 (the anatomy at 8 mm: 5 x 10^8 flops, 22 ms; with the 4 mm ball
+  // 7.2 x 10^8). A factorisation is taken up one frame later than it could be at best: a few CG
+  // iterations of 0.5 ms more on the old one.
   int swap_after_frames = 3;
-  double background_flops_per_frame = 1e9;
+  double background_flops_per_frame = 4e8;
   std::size_t background_analysed_rows = 60'000;
   int background_due_frames() const;
   // CG on a stale factorisation applies a single-precision copy of it (the same supernodal factor
@@ -158,6 +163,8 @@ class TangentSystem {
   int requests_queued_behind_warm_up() const { return queued_requests_; }
   // A factorisation requested for the background and not yet taken up (on the worker, or done there).
   bool background_under_way() const { return frames_since_request_ >= 0; }
+  // The worker is factorising at this moment (not waiting, not done): it then holds a core.
+  bool background_factorising() const;
   int max_cg_iterations = 8;
   // When CG took more than this many iterations, the next solve refactors.
   int refactor_after_iterations = 5;

@@ -182,6 +182,12 @@ double TangentSystem::take_background(bool wait) {
   return waited;
 }
 
+bool TangentSystem::background_factorising() const {
+  if (!worker_ || frames_since_request_ < 0) return false;
+  std::lock_guard<std::mutex> lock(worker_->mutex);
+  return worker_->requested && !worker_->done;
+}
+
 int TangentSystem::background_due_frames() const {
   if (!(background_flops_per_frame > 0) || !(factorisation_flops_ > 0) || rows() > background_analysed_rows)
     return swap_after_frames;
