@@ -42,10 +42,7 @@ class ElasticityTerm final : public Term {
 
   // 1 or 2 (the default) threads over this rank's cells; one in parallel runs (the ranks take the
   // cores) and below 2 kCellsPerThread cells.
-  void set_threads(unsigned int threads) {
-    threads_ = threads;
-    planned_ = false;
-  }
+  void set_threads(unsigned int threads) { threads_ = threads; }
   static constexpr unsigned int kCellsPerThread = 1000;
 
  private:
