@@ -193,21 +193,20 @@ bool ElasticityTerm::assemble_cells(const std::vector<unsigned int>& cells, cons
 }
 
 namespace {
-// The cores this process may run on (its affinity mask), counted once.
-int available_cores() {
-  static const int cores = [] {
-    cpu_set_t set;
-    CPU_ZERO(&set);
-    if (sched_getaffinity(0, sizeof set, &set) != 0) return static_cast<int>(std::thread::hardware_concurrency());
-    return CPU_COUNT(&set);
-  }();
-  return cores;
+// The cores the calling thread may run on (a real-time session pins its solver away from the haptic
+// thread's core).
+int thread_cores() {
+  cpu_set_t set;
+  CPU_ZERO(&set);
+  if (sched_getaffinity(0, sizeof set, &set) != 0) return static_cast<int>(std::thread::hardware_concurrency());
+  return CPU_COUNT(&set);
 }
 }  // namespace
 
 void ElasticityTerm::plan_threads() const {
   plan_ = {};
   planned_ = true;
+  spare_core_ = thread_cores() > 2;  // the planning thread is the one that assembles
   const std::vector<unsigned int>& mine = d_.my_cells;
   if (d_.ranks > 1 || mine.size() < 2 * kCellsPerThread) {
     plan_[0] = mine;
@@ -254,7 +253,7 @@ bool ElasticityTerm::assemble(const AssemblyState& state, AssemblyTarget& target
   // One thread takes the halves in turn: on one thread, and while the background factoriser holds a
   // core of a machine that has two, where a second thread would share that core with it (measured
   // on the anatomy with the 4 mm ball: 8.6 ms against 3.4 alone, where one thread takes about 6).
-  if (threads_ < 2 || (available_cores() < 3 && system.tangent().background_factorising()))
+  if (threads_ < 2 || (!spare_core_ && system.tangent().background_factorising()))
     return run(plan_[0]) && run(plan_[1]) && run(plan_[2]);
   bool second_ok = true;
   std::thread worker([&] { second_ok = run(plan_[1]); });

@@ -62,6 +62,9 @@ class ElasticityTerm final : public Term {
   // every cell below 2 kCellsPerThread cells and in parallel runs. Built on first use.
   mutable std::array<std::vector<unsigned int>, 3> plan_;
   mutable bool planned_ = false;
+  // The assembling thread may run on more than 2 cores: a second thread need not share the
+  // background factoriser's. Read with the plan.
+  mutable bool spare_core_ = false;
 };
 
 // Throws std::invalid_argument naming the material if it is not decoupled.

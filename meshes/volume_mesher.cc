@@ -348,8 +348,8 @@ VolumeMesh mesh_mask(const MaskVolume& mask, const MeshingSettings& s) {
     return std::move(best);
   };
   // First CGAL's restricted Delaunay surface filled by Gmsh (Delaunay, then HXT): closed, manifold
-  // and without crossing triangles by construction; if the sliver repair cannot bring that mesh to the angle asked, the
-  // same with smaller triangles (another Delaunay mesh: on a brain at 8 mm the worst element varied
+  // and without crossing triangles by construction; if the sliver repair cannot bring that mesh to
+  // the angle asked, the same with smaller triangles (another Delaunay mesh: on a brain at 8 mm the worst element varied
   // from 7.9 to 12.1 degrees between runs, one sliver inside the mesh, none on its surface). Then the surfaces contoured by VTK (as extracted,
   // remeshed by Gmsh or kept; then smoother).
   for (const double finer : {1.0, 0.85, 0.7}) {

@@ -5,11 +5,8 @@
 #include <filesystem>
 #include <string>
 
-#include <unistd.h>
-
 #include "tests/support/broken_scene.h"
 #include "tests/support/run_command.h"
-#include "tests/support/scene_variant.h"
 
 namespace fetouch::testing {
 namespace {
