@@ -17,10 +17,14 @@ std::string meshing_sizes_text(const config::MeshingOptions& m) {
     return out.str();
   };
   std::string text = mm(m.target_size_m);
-  if (m.refine_center_m) {
-    const auto& c = *m.refine_center_m;
-    text += ", " + mm(m.refine_size_m) + " within " + mm(m.refine_radius_m) + " of (" + mm(c[0]) + ", " + mm(c[1]) +
-            ", " + mm(c[2]) + ")" + (m.refine_around_probes ? " around the probes' paths" : "");
+  if (!m.refine_balls.empty()) {
+    std::string balls;
+    for (const auto& ball : m.refine_balls) {
+      const auto& c = ball.center_m;
+      balls += (balls.empty() ? "" : ", ") + mm(ball.radius_m) + " of (" + mm(c[0]) + ", " + mm(c[1]) + ", " + mm(c[2]) + ")";
+    }
+    text += ", " + mm(m.refine_size_m) + " within " + balls +
+            (m.refine_around_probes ? m.refine_balls.size() > 1 ? " around each probe's path" : " around the probes' paths" : "");
   }
   if (m.surface != config::MeshSurface::conforming) return text;
   text += ", conforming regions";
@@ -51,10 +55,13 @@ MeshRequest mesh_request(const config::MeshingOptions& m) {
       if (name == region.name) size = size_m * 1e3;
     s.region_size_mm.push_back(size);
   }
-  if (m.refine_center_m) {
-    for (int d = 0; d < 3; ++d) s.refine_center_mm[std::size_t(d)] = (*m.refine_center_m)[std::size_t(d)] * 1e3;
-    s.refine_radius_mm = m.refine_radius_m * 1e3, s.refine_size_mm = m.refine_size_m * 1e3;
+  for (const auto& ball : m.refine_balls) {
+    meshes::MeshingSettings::RefineBall b;
+    for (int d = 0; d < 3; ++d) b.center_mm[std::size_t(d)] = ball.center_m[std::size_t(d)] * 1e3;
+    b.radius_mm = ball.radius_m * 1e3;
+    s.refine_balls.push_back(b);
   }
+  if (!m.refine_balls.empty()) s.refine_size_mm = m.refine_size_m * 1e3;
   return r;
 }
 

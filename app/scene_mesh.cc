@@ -71,9 +71,9 @@ std::string cache_key(const config::MeshSpec& spec) {
     key << '|' << name << '=';
     for (int l : labels) key << l << ',';
   }
-  if (m.refine_center_m)
-    key << '|' << (*m.refine_center_m)[0] << ',' << (*m.refine_center_m)[1] << ',' << (*m.refine_center_m)[2] << ','
-        << m.refine_radius_m << ',' << m.refine_size_m;
+  for (const auto& ball : m.refine_balls)  // one ball spelled as before there were several
+    key << '|' << ball.center_m[0] << ',' << ball.center_m[1] << ',' << ball.center_m[2] << ',' << ball.radius_m << ','
+        << m.refine_size_m;
   return key.str();
 }
 
@@ -203,9 +203,7 @@ config::MeshSpec resolved_mesh_spec(const config::Scene& scene) {
   auto& m = spec.meshing;
   if (!m.refine_around_probes) return spec;
   const double inf = std::numeric_limits<double>::infinity();
-  Eigen::Vector3d low(inf, inf, inf), high = -low;
-  double radius = 0;
-  bool traced = false;
+  m.refine_balls.clear();
   for (std::size_t i = 0; i < scene.probes.size(); ++i) {
     const config::Probe& probe = scene.probes[i];
     if (probe.device.trajectory.empty()) continue;  // a PHANTOM or the mouse: no path known beforehand
@@ -215,17 +213,16 @@ config::MeshSpec resolved_mesh_spec(const config::Scene& scene) {
     } catch (const std::exception& e) {
       throw std::runtime_error(scene.source.string() + ": meshing.refine.around_probes: " + e.what());
     }
+    // A ball around this probe's path: the path's box, widened by the probe's radius.
+    Eigen::Vector3d low(inf, inf, inf), high = -low;
     for (const Eigen::Vector3d& x : path.positions_m) low = low.cwiseMin(x), high = high.cwiseMax(x);
-    radius = std::max(radius, probe.radius_m);
-    traced = true;
+    const Eigen::Vector3d centre = (low + high) / 2;
+    m.refine_balls.push_back({config::Vec3{centre[0], centre[1], centre[2]}, (high - low).norm() / 2 + probe.radius_m});
   }
-  if (!traced)
+  if (m.refine_balls.empty())
     throw std::runtime_error(scene.source.string() +
                              ": meshing.refine.around_probes: no probe has a trajectory (a replay or operator device) "
                              "to refine around; give refine.center_m and radius_m instead");
-  const Eigen::Vector3d centre = (low + high) / 2;
-  m.refine_center_m = config::Vec3{centre[0], centre[1], centre[2]};
-  m.refine_radius_m = (high - low).norm() / 2 + radius;
   return spec;
 }
 

@@ -57,11 +57,15 @@ struct MeshingOptions {
   MeshSurface surface = MeshSurface::restricted;
   // Per region element sizes (`conforming` only): region name and size; the others take target_size_m.
   std::vector<std::pair<std::string, double>> sizes_m;
-  // Finer elements near a point (absent: none).
-  std::optional<Vec3> refine_center_m;
-  double refine_radius_m = 0, refine_size_m = 0;
-  // The ball around the probes' trajectories instead (refine_size_m inside): the app finds its
-  // centre and radius from the trajectory files (app/scene_mesh.h) before meshing.
+  // Finer elements, refine_size_m, in balls (none: no refinement): the one a scene gives, or one
+  // around each probe's trajectory (refine_around_probes: the app finds their centres and radii from
+  // the trajectory files before meshing, app/scene_mesh.h).
+  struct RefineBall {
+    Vec3 center_m{};
+    double radius_m = 0;
+  };
+  std::vector<RefineBall> refine_balls;
+  double refine_size_m = 0;
   bool refine_around_probes = false;
 };
 

@@ -236,6 +236,7 @@ void read_meshing(MapView& parent, MeshingOptions& out) {
     MapView refine(map.reader(), r.value, r.path, r.key_mark, {"center_m", "radius_m", "size_m", "around_probes"});
     if (refine.valid()) refine.boolean("around_probes", out.refine_around_probes);
     Vec3 center{};
+    double radius = 0;
     if (out.refine_around_probes) {  // the ball is the probes' (app/scene_mesh.h)
       for (const char* key : {"center_m", "radius_m"})
         if (refine.has(key)) {
@@ -245,9 +246,9 @@ void read_meshing(MapView& parent, MeshingOptions& out) {
         }
       refine.number("size_m", out.refine_size_m, plausible::element_size_m, Need::required);
     } else if (refine.valid() && refine.vec3("center_m", center, Need::required) &&
-               refine.number("radius_m", out.refine_radius_m, plausible::tissue_length_m, Need::required) &&
+               refine.number("radius_m", radius, plausible::tissue_length_m, Need::required) &&
                refine.number("size_m", out.refine_size_m, plausible::element_size_m, Need::required)) {
-      out.refine_center_m = center;
+      out.refine_balls = {{center, radius}};
     }
   }
 }

@@ -218,19 +218,28 @@ GmshFill gmsh_fill(const std::vector<double>& nodes_mm, const std::vector<std::s
   }
   const double h = s.element_size_mm * 1e-3;
   gmsh::option::setNumber("Mesh.MeshSizeMax", h);
-  gmsh::option::setNumber("Mesh.MeshSizeMin", 0.2 * (s.refine_radius_mm > 0 ? std::min(h, s.refine_size_mm * 1e-3) : h));
-  if (s.refine_radius_mm > 0) {
-    // Finer elements in a ball (where the probe touches), grading to the element size over one
-    // more radius.
-    const int ball = gmsh::model::mesh::field::add("Ball");
-    gmsh::model::mesh::field::setNumber(ball, "Radius", s.refine_radius_mm * 1e-3);
-    gmsh::model::mesh::field::setNumber(ball, "Thickness", s.refine_radius_mm * 1e-3);
-    gmsh::model::mesh::field::setNumber(ball, "VIn", s.refine_size_mm * 1e-3);
-    gmsh::model::mesh::field::setNumber(ball, "VOut", h);
-    gmsh::model::mesh::field::setNumber(ball, "XCenter", s.refine_center_mm[0] * 1e-3);
-    gmsh::model::mesh::field::setNumber(ball, "YCenter", s.refine_center_mm[1] * 1e-3);
-    gmsh::model::mesh::field::setNumber(ball, "ZCenter", s.refine_center_mm[2] * 1e-3);
-    gmsh::model::mesh::field::setAsBackgroundMesh(ball);
+  gmsh::option::setNumber("Mesh.MeshSizeMin", 0.2 * (!s.refine_balls.empty() ? std::min(h, s.refine_size_mm * 1e-3) : h));
+  if (!s.refine_balls.empty()) {
+    // Finer elements in each ball (where a probe touches), grading to the element size over one
+    // more radius; where balls overlap the finest (a Min field; one ball is its own field, as before).
+    std::vector<double> fields;
+    for (const MeshingSettings::RefineBall& b : s.refine_balls) {
+      const int ball = gmsh::model::mesh::field::add("Ball");
+      gmsh::model::mesh::field::setNumber(ball, "Radius", b.radius_mm * 1e-3);
+      gmsh::model::mesh::field::setNumber(ball, "Thickness", b.radius_mm * 1e-3);
+      gmsh::model::mesh::field::setNumber(ball, "VIn", s.refine_size_mm * 1e-3);
+      gmsh::model::mesh::field::setNumber(ball, "VOut", h);
+      gmsh::model::mesh::field::setNumber(ball, "XCenter", b.center_mm[0] * 1e-3);
+      gmsh::model::mesh::field::setNumber(ball, "YCenter", b.center_mm[1] * 1e-3);
+      gmsh::model::mesh::field::setNumber(ball, "ZCenter", b.center_mm[2] * 1e-3);
+      fields.push_back(ball);
+    }
+    int background = static_cast<int>(fields.front());
+    if (fields.size() > 1) {
+      background = gmsh::model::mesh::field::add("Min");
+      gmsh::model::mesh::field::setNumbers(background, "FieldsList", fields);
+    }
+    gmsh::model::mesh::field::setAsBackgroundMesh(background);
   }
   gmsh::option::setNumber("Mesh.Optimize", 1);
   // The mesher, then the optimiser on every element of quality (gamma) under 0.5: on the phantom's

@@ -255,22 +255,24 @@ VolumeMesh mesh_labels(const MaskVolume& labels, const std::vector<MeshRegion>& 
   for (std::size_t c = 0; c < cells; ++c)
     if (index[c] > 0) size->v[c] = static_cast<float>(size_mm[index[c]]);
   const auto& dir = labels.direction;
-  Point3 centre{};  // the refinement ball's centre in the grid's frame
-  for (int c = 0; c < 3; ++c) {
-    centre[std::size_t(c)] = kPad * labels.spacing_mm[std::size_t(c)];
-    for (int r = 0; r < 3; ++r) centre[std::size_t(c)] += dir[std::size_t(3 * r + c)] * (s.refine_center_mm[std::size_t(r)] - labels.origin_mm[std::size_t(r)]);
-  }
-  if (s.refine_radius_mm > 0 && s.refine_size_mm > 0)
+  for (const MeshingSettings::RefineBall& ball : s.refine_balls) {
+    Point3 centre{};  // the refinement ball's centre in the grid's frame
+    for (int c = 0; c < 3; ++c) {
+      centre[std::size_t(c)] = kPad * labels.spacing_mm[std::size_t(c)];
+      for (int r = 0; r < 3; ++r)
+        centre[std::size_t(c)] += dir[std::size_t(3 * r + c)] * (ball.center_mm[std::size_t(r)] - labels.origin_mm[std::size_t(r)]);
+    }
+    if (!(ball.radius_mm > 0 && s.refine_size_mm > 0)) continue;
     for (int k = 0; k < n[2]; ++k)
       for (int j = 0; j < n[1]; ++j)
         for (int i = 0; i < n[0]; ++i) {
           const double dx = i * labels.spacing_mm[0] - centre[0], dy = j * labels.spacing_mm[1] - centre[1],
                        dz = k * labels.spacing_mm[2] - centre[2];
-          if (dx * dx + dy * dy + dz * dz <= s.refine_radius_mm * s.refine_radius_mm) {
-            float& here = size->v[(std::size_t(k) * n[1] + j) * n[0] + i];
-            here = std::min(here, static_cast<float>(s.refine_size_mm));
-          }
+          if (dx * dx + dy * dy + dz * dz > ball.radius_mm * ball.radius_mm) continue;
+          float& here = size->v[(std::size_t(k) * n[1] + j) * n[0] + i];
+          here = std::min(here, static_cast<float>(s.refine_size_mm));
         }
+  }
   grade(*size, s.grading);
 
   // 3. Delaunay refinement of the labelled domain.

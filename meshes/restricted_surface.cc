@@ -21,6 +21,7 @@
 #include <sstream>
 #include <stdexcept>
 #include <unordered_map>
+#include <vector>
 
 namespace fetouch::meshes {
 
@@ -60,17 +61,23 @@ std::vector<float> blurred_mask(const MaskVolume& mask, double sigma, std::array
 // 5.81 mm.
 constexpr double kCircumradiusPerEdge = 1.3 / 1.7320508075688772;
 
-// The triangles' size, finer in a ball (the refinement of MeshingSettings), in the padded grid's
-// frame.
+// The triangles' size, finer in the balls (the refinement of MeshingSettings; the finest where they
+// overlap), in the padded grid's frame.
 struct FacetSize {
-  double size = 0, inner = 0, radius = 0;
-  Point3 centre{};
+  struct Ball {
+    Point3 centre{};
+    double radius = 0;
+  };
+  double size = 0, inner = 0;
+  std::vector<Ball> balls;
   double operator()(const Kernel::Point_3& p, int, const Domain::Index&) const {
     double edge = size;
-    if (radius > 0) {
-      const double r = std::sqrt((p.x() - centre[0]) * (p.x() - centre[0]) + (p.y() - centre[1]) * (p.y() - centre[1]) +
-                                 (p.z() - centre[2]) * (p.z() - centre[2]));
-      edge = r <= radius ? inner : r >= 2 * radius ? size : inner + (size - inner) * (r - radius) / radius;
+    for (const Ball& b : balls) {
+      const double r = std::sqrt((p.x() - b.centre[0]) * (p.x() - b.centre[0]) + (p.y() - b.centre[1]) * (p.y() - b.centre[1]) +
+                                 (p.z() - b.centre[2]) * (p.z() - b.centre[2]));
+      edge = std::min(edge, r <= b.radius       ? inner
+                            : r >= 2 * b.radius ? size
+                                                : inner + (size - inner) * (r - b.radius) / b.radius);
     }
     return kCircumradiusPerEdge * edge;
   }
@@ -102,11 +109,16 @@ RestrictedSurface restricted_surface(const MaskVolume& mask, const MeshingSettin
   CGAL::Random random(1);
   const Domain domain = Domain::create_gray_image_mesh_domain(image, params::iso_value = 0.5f, params::value_outside = 0.f,
                                                                params::relative_error_bound = 1e-4, params::p_rng = &random);
-  FacetSize size{s.element_size_mm, s.refine_size_mm, s.refine_radius_mm, {}};
+  FacetSize size{s.element_size_mm, s.refine_size_mm, {}};
   const auto& d = mask.direction;
-  for (int c = 0; c < 3; ++c) {  // world to grid: the transpose of the direction cosines
-    size.centre[c] = kPad * mask.spacing_mm[c];
-    for (int r = 0; r < 3; ++r) size.centre[c] += d[3 * r + c] * (s.refine_center_mm[r] - mask.origin_mm[r]);
+  for (const MeshingSettings::RefineBall& ball : s.refine_balls) {
+    if (!(ball.radius_mm > 0)) continue;
+    FacetSize::Ball b{{}, ball.radius_mm};
+    for (int c = 0; c < 3; ++c) {  // world to grid: the transpose of the direction cosines
+      b.centre[c] = kPad * mask.spacing_mm[c];
+      for (int r = 0; r < 3; ++r) b.centre[c] += d[3 * r + c] * (ball.center_mm[r] - mask.origin_mm[r]);
+    }
+    size.balls.push_back(b);
   }
   const Criteria criteria(params::facet_angle = 25, params::facet_size = size, params::facet_distance = distance_mm);
   Complex complex;

@@ -24,7 +24,7 @@ struct RestrictedSurface {
 };
 
 // Triangles of about `s.element_size_mm` where the surface is smooth (`s.refine_size_mm` within
-// `s.refine_radius_mm` of `s.refine_center_mm`, graded over one more radius), none straying more
+// each of `s.refine_balls`, graded over one more radius), none straying more
 // than `distance_mm` from the level. Throws std::runtime_error when nothing of the mask reaches the
 // level (empty, or nothing thicker than a voxel).
 RestrictedSurface restricted_surface(const MaskVolume& mask, const MeshingSettings& s, double distance_mm);

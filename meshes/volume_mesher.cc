@@ -84,15 +84,18 @@ vtkSmartPointer<vtkPolyData> triangle_surface(const std::vector<Point3>& nodes, 
 // Refuses settings that make no sense or a mesh too large for the memory, from the volume to fill.
 void check_settings(double volume_mm3, const MeshingSettings& s) {
   if (!(s.element_size_mm > 0)) throw std::runtime_error("meshing: the element size must be positive");
-  if (s.refine_radius_mm > 0 && !(s.refine_size_mm > 0))
+  if (!s.refine_balls.empty() && !(s.refine_size_mm > 0))
     throw std::runtime_error("meshing: the refinement size must be positive");
+  for (const auto& ball : s.refine_balls)
+    if (!(ball.radius_mm > 0)) throw std::runtime_error("meshing: a refinement ball's radius must be positive");
   // A regular tetrahedron of edge a has a volume of a^3 / (6 sqrt 2).
   const auto tetrahedra_in = [](double v, double size_mm) { return v / (std::pow(size_mm, 3) / (6 * std::sqrt(2.0))); };
   double estimate = tetrahedra_in(volume_mm3, s.element_size_mm);
-  if (s.refine_radius_mm > 0) estimate += tetrahedra_in(4 * M_PI / 3 * std::pow(2 * s.refine_radius_mm, 3), s.refine_size_mm);
+  for (const auto& ball : s.refine_balls)
+    estimate += tetrahedra_in(4 * M_PI / 3 * std::pow(2 * ball.radius_mm, 3), s.refine_size_mm);
   if (estimate > 2e7)
     throw std::runtime_error("meshing: an element size of " + std::to_string(s.element_size_mm) + " mm" +
-                             (s.refine_radius_mm > 0 ? " (" + std::to_string(s.refine_size_mm) + " mm refined)" : "") +
+                             (!s.refine_balls.empty() ? " (" + std::to_string(s.refine_size_mm) + " mm refined)" : "") +
                              " would make about " + std::to_string(static_cast<long>(estimate)) +
                              " tetrahedra, more than memory allows (20 million)");
 }

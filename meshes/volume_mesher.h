@@ -43,10 +43,14 @@ struct MeshingSettings {
   double min_radius_ratio = 0.1;
   // false: no restricted Delaunay surface; only the surfaces contoured by VTK (remeshed by Gmsh).
   bool restricted_surface = true;
-  // Refinement: elements of refine_size_mm within refine_radius_mm of refine_center_mm, grading to
-  // element_size_mm over one more radius (none when the radius is 0).
-  std::array<double, 3> refine_center_mm{0, 0, 0};
-  double refine_radius_mm = 0, refine_size_mm = 0;
+  // Refinement: elements of refine_size_mm within each ball (a probe's working region each), grading
+  // to element_size_mm over one more radius; the finest size wins where balls overlap. None: no ball.
+  struct RefineBall {
+    std::array<double, 3> center_mm{0, 0, 0};
+    double radius_mm = 0;
+  };
+  std::vector<RefineBall> refine_balls;
+  double refine_size_mm = 0;
   // The conforming mesher of a label map (meshes/labeled_mesher.h): each region's size (by region
   // index; absent or 0: element_size_mm), how fast sizes may grow away from a finer region or the
   // refinement ball (mm per mm), the Gaussian that smooths the label boundaries (voxels), and how far

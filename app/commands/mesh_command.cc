@@ -126,8 +126,8 @@ int run_mesh(const MeshOptions& o) {
     settings.region_size_mm[at] = size;
   }
   if (!o.refine.empty()) {
-    settings.refine_center_mm = {o.refine[0], o.refine[1], o.refine[2]};
-    settings.refine_radius_mm = o.refine[3], settings.refine_size_mm = o.refine[4];
+    settings.refine_balls = {{{o.refine[0], o.refine[1], o.refine[2]}, o.refine[3]}};
+    settings.refine_size_mm = o.refine[4];
   }
   try {
     Progress progress("meshing", 100, std::cerr, Progress::stderr_is_terminal());

@@ -1,7 +1,8 @@
-// meshing.refine: {around_probes: true}: the refinement ball made from the scene's trajectories, against
-// its closed form: the centre of the bounding box of every replayed or operated probe's path, and
-// half the box's diagonal plus the largest such probe's radius. Probes without a path (the mouse,
-// a PHANTOM) add nothing; a scene without any is refused with its name.
+// meshing.refine: {around_probes: true}: the refinement balls made from the scene's trajectories, against
+// their closed form: one per replayed or operated probe, at the centre of the bounding box of its
+// path, of radius half the box's diagonal plus the probe's radius (two users at the two sides of the
+// uterus get a ball each, not one ball over the whole of it). Probes without a path (the mouse, a
+// PHANTOM) add nothing; a scene without any is refused with its name.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -34,7 +35,7 @@ config::Probe probe(const std::string& name, config::DeviceType type, const fs::
   return p;
 }
 
-TEST(ProbeRefinement, TheBallHoldsEveryProbesPathWidenedByItsRadius) {
+TEST(ProbeRefinement, EachProbesPathGetsABallWidenedByItsRadius) {
   config::Scene scene;
   scene.source = "/scenes/two_hands.yaml";
   scene.mesh.source = config::MeshSource::phantom;
@@ -47,18 +48,28 @@ TEST(ProbeRefinement, TheBallHoldsEveryProbesPathWidenedByItsRadius) {
   scene.probes.push_back(probe("right", config::DeviceType::operator_model, b, 0.008));
   scene.probes.push_back(probe("mouse", config::DeviceType::mouse, {}, 0.02));  // no path: not counted
   const config::MeshSpec spec = resolved_mesh_spec(scene);
-  ASSERT_TRUE(spec.meshing.refine_center_m.has_value());
-  // Box [-0.01, 0.01] x [0, 0.02] x [0.04, 0.06]: centre (0, 0.01, 0.05), half diagonal 0.01 sqrt(3).
-  const auto& c = *spec.meshing.refine_center_m;
-  EXPECT_NEAR(c[0], 0.0, 1e-15);
-  EXPECT_NEAR(c[1], 0.01, 1e-15);
-  EXPECT_NEAR(c[2], 0.05, 1e-15);
-  EXPECT_NEAR(spec.meshing.refine_radius_m, 0.01 * std::sqrt(3.0) + 0.008, 1e-15);
+  ASSERT_EQ(spec.meshing.refine_balls.size(), 2u);
+  // left: box [0, 0.01] x [0, 0.02] x [0.04, 0.06], centre (0.005, 0.01, 0.05), half diagonal
+  // sqrt(0.01^2 + 0.02^2 + 0.02^2) / 2 = 0.015, widened by its 5 mm.
+  const auto& left = spec.meshing.refine_balls[0];
+  EXPECT_NEAR(left.center_m[0], 0.005, 1e-15);
+  EXPECT_NEAR(left.center_m[1], 0.01, 1e-15);
+  EXPECT_NEAR(left.center_m[2], 0.05, 1e-15);
+  EXPECT_NEAR(left.radius_m, 0.015 + 0.005, 1e-15);
+  // right: the segment from (-0.01, 0, 0.05) to (-0.01, 0.01, 0.05), widened by its 8 mm.
+  const auto& right = spec.meshing.refine_balls[1];
+  EXPECT_NEAR(right.center_m[0], -0.01, 1e-15);
+  EXPECT_NEAR(right.center_m[1], 0.005, 1e-15);
+  EXPECT_NEAR(right.center_m[2], 0.05, 1e-15);
+  EXPECT_NEAR(right.radius_m, 0.005 + 0.008, 1e-15);
   EXPECT_DOUBLE_EQ(spec.meshing.refine_size_m, 0.003);
-  EXPECT_NE(meshing_sizes_text(spec.meshing).find("3 mm within"), std::string::npos) << meshing_sizes_text(spec.meshing);
+  const std::string text = meshing_sizes_text(spec.meshing);
+  EXPECT_NE(text.find("3 mm within 20 mm of (5 mm, 10 mm, 50 mm), 13 mm of (-10 mm, 5 mm, 50 mm) around each probe's path"),
+            std::string::npos)
+      << text;
 
   scene.mesh.meshing.refine_around_probes = false;  // not asked: unchanged
-  EXPECT_FALSE(resolved_mesh_spec(scene).meshing.refine_center_m.has_value());
+  EXPECT_TRUE(resolved_mesh_spec(scene).meshing.refine_balls.empty());
 
   scene.mesh.meshing.refine_around_probes = true;
   scene.probes.resize(1);

@@ -218,7 +218,7 @@ TEST(SceneLoader, ConformingRegionsTakeSizes) {
   EXPECT_THROW(scene("{regions: {wall: [1]}, surface: conforming, sizes: {wall: -1}}"), SceneError);
 }
 
-// meshing.refine: a ball given, or the ball around the probes' paths (the app finds it from the
+// meshing.refine: a ball given, or a ball around each probe's path (the app finds them from the
 // trajectories: tests/app/test_probe_refinement.cc).
 TEST(SceneLoader, RefinementBallGivenOrAroundTheProbes) {
   const auto scene = [&](const std::string& meshing) {
@@ -228,13 +228,14 @@ TEST(SceneLoader, RefinementBallGivenOrAroundTheProbes) {
         .scene;
   };
   const Scene given = scene("{refine: {center_m: [0, 0, 0.05], radius_m: 0.02, size_m: 0.003}}");
-  ASSERT_TRUE(given.mesh.meshing.refine_center_m.has_value());
-  EXPECT_DOUBLE_EQ(given.mesh.meshing.refine_radius_m, 0.02);
+  ASSERT_EQ(given.mesh.meshing.refine_balls.size(), 1u);
+  EXPECT_DOUBLE_EQ(given.mesh.meshing.refine_balls[0].radius_m, 0.02);
+  EXPECT_DOUBLE_EQ(given.mesh.meshing.refine_balls[0].center_m[2], 0.05);
   EXPECT_FALSE(given.mesh.meshing.refine_around_probes);
   const Scene around = scene("{refine: {around_probes: true, size_m: 0.003}}");
   EXPECT_TRUE(around.mesh.meshing.refine_around_probes);
   EXPECT_DOUBLE_EQ(around.mesh.meshing.refine_size_m, 0.003);
-  EXPECT_FALSE(around.mesh.meshing.refine_center_m.has_value());
+  EXPECT_TRUE(around.mesh.meshing.refine_balls.empty());
   EXPECT_THROW(scene("{refine: {around_probes: true, size_m: 0.003, center_m: [0, 0, 0]}}"), SceneError);
   EXPECT_THROW(scene("{refine: {around_probes: true}}"), SceneError);  // no size
   EXPECT_THROW(scene("{refine: {around_probes: false, size_m: 0.003}}"), SceneError);  // then a centre and radius
