@@ -23,8 +23,8 @@ std::string meshing_sizes_text(const config::MeshingOptions& m) {
       const auto& c = ball.center_m;
       balls += (balls.empty() ? "" : ", ") + mm(ball.radius_m) + " of (" + mm(c[0]) + ", " + mm(c[1]) + ", " + mm(c[2]) + ")";
     }
-    text += ", " + mm(m.refine_size_m) + " within " + balls +
-            (m.refine_around_probes ? m.refine_balls.size() > 1 ? " around each probe's path" : " around the probes' paths" : "");
+    text += ", " + mm(m.refine_size_m) + " within " + balls;
+    if (m.refine_around_probes) text += m.refine_balls.size() > 1 ? " around each probe's path" : " around the probes' paths";
   }
   if (m.surface != config::MeshSurface::conforming) return text;
   text += ", conforming regions";

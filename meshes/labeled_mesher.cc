@@ -259,8 +259,8 @@ VolumeMesh mesh_labels(const MaskVolume& labels, const std::vector<MeshRegion>& 
     Point3 centre{};  // the refinement ball's centre in the grid's frame
     for (int c = 0; c < 3; ++c) {
       centre[std::size_t(c)] = kPad * labels.spacing_mm[std::size_t(c)];
-      for (int r = 0; r < 3; ++r)
-        centre[std::size_t(c)] += dir[std::size_t(3 * r + c)] * (ball.center_mm[std::size_t(r)] - labels.origin_mm[std::size_t(r)]);
+      for (std::size_t r = 0; r < 3; ++r)
+        centre[std::size_t(c)] += dir[3 * r + std::size_t(c)] * (ball.center_mm[r] - labels.origin_mm[r]);
     }
     if (!(ball.radius_mm > 0 && s.refine_size_mm > 0)) continue;
     for (int k = 0; k < n[2]; ++k)
