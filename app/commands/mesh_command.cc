@@ -48,7 +48,7 @@ struct MeshOptions {
   double size_mm = 3;
   double min_dihedral_deg = 10;
   int partitions = 0;
-  std::vector<double> refine;     // X Y Z RADIUS SIZE, mm
+  std::vector<double> refine;     // X Y Z RADIUS SIZE, mm, for each --refine
   bool json = false;
 };
 
@@ -125,9 +125,16 @@ int run_mesh(const MeshOptions& o) {
     settings.region_size_mm.resize(regions.size(), 0);
     settings.region_size_mm[at] = size;
   }
-  if (!o.refine.empty()) {
-    settings.refine_balls = {{{o.refine[0], o.refine[1], o.refine[2]}, o.refine[3]}};
-    settings.refine_size_mm = o.refine[4];
+  // Each --refine a ball (a scene's `refine: {around_probes: true}` makes one per probe); the balls
+  // share one size, as a scene's do.
+  for (std::size_t at = 0; at + 5 <= o.refine.size(); at += 5) {
+    settings.refine_balls.push_back({{o.refine[at], o.refine[at + 1], o.refine[at + 2]}, o.refine[at + 3]});
+    if (at > 0 && o.refine[at + 4] != settings.refine_size_mm) {
+      std::cerr << "error: --refine: every ball takes the same SIZE (" << settings.refine_size_mm << " mm, then "
+                << o.refine[at + 4] << " mm)\n";
+      return kExitBadInput;
+    }
+    settings.refine_size_mm = o.refine[at + 4];
   }
   try {
     Progress progress("meshing", 100, std::cerr, Progress::stderr_is_terminal());
@@ -372,8 +379,11 @@ void add_mesh_command(CLI::App& parent, int& exit_code) {
                   "MESH.rejected.vtu)")
       ->check(CLI::Range(1.0, 35.0))
       ->capture_default_str();
-  cmd->add_option("--refine", o->refine, "Finer elements near a point: X Y Z RADIUS SIZE (mm; grading over one more radius)")
-      ->expected(5);
+  cmd->add_option("--refine", o->refine,
+                  "Finer elements near a point: X Y Z RADIUS SIZE (mm; grading over one more radius); repeatable, one "
+                  "ball each, the same SIZE")
+      ->expected(5)
+      ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
   cmd->add_option("--partitions", o->partitions, "METIS partitions in the .msh")->check(CLI::Range(0, 1024));
   cmd->add_flag("--json", o->json, "Print the report as JSON on stdout");
   cmd->callback([o, &exit_code]() { exit_code = run_mesh(*o); });

@@ -19,6 +19,7 @@
 #include <vtkUnstructuredGrid.h>
 #include <vtkXMLUnstructuredGridReader.h>
 
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
@@ -152,18 +153,12 @@ TEST(MeshCommand, TheSameLabelsMeshToTheSameBytesInEveryProcess) {
   fs::remove_all(dir);
 }
 
-TEST(MeshCommand, RefinementNearAPoint) {
-  // The whole sac (labels 1-6, about 140 x 110 x 100 mm) at 6 mm, with 2 mm elements within 15 mm
-  // of its centre: the edges near the centre are much shorter than those far from it.
-  const fs::path dir = fs::temp_directory_path() / ("fetouch_mesh_refine_" + std::to_string(::getpid()));
-  ASSERT_EQ(run_command(fetouch("phantom --out " + (dir / "phantom").string())).exit_code, 0);
-  const YAML::Node j = check_mesh((dir / "phantom" / "phantom_labels.mha").string() +
-                                      " --labels 1 2 3 4 5 6 --size 6 --refine 0 0 0 15 2",
-                                  dir / "refined.msh");
-  ASSERT_TRUE(j);
-  const auto grid = read_tetrahedra(j["vtu"].as<std::string>());
+// Mean edge length (mm) of the tetrahedra whose centres lie within `inner` mm of `point` (mm), and
+// of those beyond `outer` mm from it; the counts in `near` and `far`.
+void edges_about(vtkUnstructuredGrid* grid, const std::array<double, 3>& point, double inner, double outer, double& near_mm,
+                 double& far_mm, long& near, long& far) {
   double near_sum = 0, far_sum = 0;
-  long near = 0, far = 0;
+  near = 0, far = 0;
   for (vtkIdType c = 0; c < grid->GetNumberOfCells(); ++c) {
     vtkCell* cell = grid->GetCell(c);
     double centre[3] = {0, 0, 0}, length = 0;
@@ -174,16 +169,61 @@ TEST(MeshCommand, RefinementNearAPoint) {
       length += std::sqrt(vtkMath::Distance2BetweenPoints(p, q)) / 4;
       for (int d = 0; d < 3; ++d) centre[d] += p[d] / 4;
     }
-    const double r_mm = 1e3 * std::sqrt(centre[0] * centre[0] + centre[1] * centre[1] + centre[2] * centre[2]);
-    if (r_mm < 12) near_sum += length, ++near;
-    if (r_mm > 45) far_sum += length, ++far;
+    double r2 = 0;
+    for (int d = 0; d < 3; ++d) r2 += (1e3 * centre[d] - point[std::size_t(d)]) * (1e3 * centre[d] - point[std::size_t(d)]);
+    const double r_mm = std::sqrt(r2);
+    if (r_mm < inner) near_sum += length, ++near;
+    if (r_mm > outer) far_sum += length, ++far;
   }
+  near_mm = near > 0 ? 1e3 * near_sum / near : 0, far_mm = far > 0 ? 1e3 * far_sum / far : 0;
+}
+
+TEST(MeshCommand, RefinementNearAPoint) {
+  // The whole sac (labels 1-6, about 140 x 110 x 100 mm) at 6 mm, with 2 mm elements within 15 mm
+  // of its centre: the edges near the centre are much shorter than those far from it.
+  const fs::path dir = fs::temp_directory_path() / ("fetouch_mesh_refine_" + std::to_string(::getpid()));
+  ASSERT_EQ(run_command(fetouch("phantom --out " + (dir / "phantom").string())).exit_code, 0);
+  const YAML::Node j = check_mesh((dir / "phantom" / "phantom_labels.mha").string() +
+                                      " --labels 1 2 3 4 5 6 --size 6 --refine 0 0 0 15 2",
+                                  dir / "refined.msh");
+  ASSERT_TRUE(j);
+  const auto grid = read_tetrahedra(j["vtu"].as<std::string>());
+  double near_mm = 0, far_mm = 0;
+  long near = 0, far = 0;
+  edges_about(grid, {0, 0, 0}, 12, 45, near_mm, far_mm, near, far);
   ASSERT_GT(near, 0);
   ASSERT_GT(far, 0);
-  std::printf("mean edge %.2f mm within 12 mm of the point (%ld elements), %.2f mm beyond 45 mm (%ld)\n",
-              1e3 * near_sum / near, near, 1e3 * far_sum / far, far);
-  EXPECT_LT(near_sum / near, 0.5 * far_sum / far);
-  EXPECT_LT(1e3 * near_sum / near, 3);
+  std::printf("mean edge %.2f mm within 12 mm of the point (%ld elements), %.2f mm beyond 45 mm (%ld)\n", near_mm, near,
+              far_mm, far);
+  EXPECT_LT(near_mm, 0.5 * far_mm);
+  EXPECT_LT(near_mm, 3);
+
+  // Two balls (two probes at the two ends of the sac, as a scene's `refine: {around_probes: true}`
+  // makes them): fine elements about each point, coarse between them and about neither.
+  const YAML::Node two = check_mesh((dir / "phantom" / "phantom_labels.mha").string() +
+                                        " --labels 1 2 3 4 5 6 --size 6 --refine -45 0 0 12 2 --refine 45 0 0 12 2",
+                                    dir / "two.msh");
+  ASSERT_TRUE(two);
+  const auto both = read_tetrahedra(two["vtu"].as<std::string>());
+  for (const double x : {-45.0, 45.0}) {
+    edges_about(both, {x, 0, 0}, 9, 1e9, near_mm, far_mm, near, far);
+    ASSERT_GT(near, 0);
+    double middle_mm = 0, unused = 0;
+    long middle = 0, none = 0;
+    edges_about(both, {0, 0, 0}, 12, 1e9, middle_mm, unused, middle, none);
+    ASSERT_GT(middle, 0);
+    std::printf("two balls: mean edge %.2f mm within 9 mm of x = %.0f mm, %.2f mm within 12 mm of the middle\n", near_mm, x,
+                middle_mm);
+    EXPECT_LT(near_mm, 3);
+    EXPECT_LT(near_mm, 0.5 * middle_mm);
+  }
+  // The balls share one size, as a scene's do: a second size is refused by name.
+  const auto mixed = run_command(fetouch("mesh " + (dir / "phantom" / "phantom_labels.mha").string() +
+                                         " --labels 1 2 3 4 5 6 --size 6 --refine -45 0 0 12 2 --refine 45 0 0 12 3 --out " +
+                                         (dir / "mixed.msh").string()));
+  EXPECT_EQ(mixed.exit_code, 2);
+  EXPECT_NE(mixed.err.find("--refine"), std::string::npos) << mixed.err;
+  EXPECT_FALSE(fs::exists(dir / "mixed.msh"));
   fs::remove_all(dir);
 }
 
