@@ -256,13 +256,8 @@ VolumeMesh mesh_labels(const MaskVolume& labels, const std::vector<MeshRegion>& 
     if (index[c] > 0) size->v[c] = static_cast<float>(size_mm[index[c]]);
   const auto& dir = labels.direction;
   for (const MeshingSettings::RefineBall& ball : s.refine_balls) {
-    Point3 centre{};  // the refinement ball's centre in the grid's frame
-    for (int c = 0; c < 3; ++c) {
-      centre[std::size_t(c)] = kPad * labels.spacing_mm[std::size_t(c)];
-      for (std::size_t r = 0; r < 3; ++r)
-        centre[std::size_t(c)] += dir[3 * r + std::size_t(c)] * (ball.center_mm[r] - labels.origin_mm[r]);
-    }
     if (!(ball.radius_mm > 0 && s.refine_size_mm > 0)) continue;
+    const Point3 centre = padded_grid_point(labels, ball.center_mm, kPad);
     for (int k = 0; k < n[2]; ++k)
       for (int j = 0; j < n[1]; ++j)
         for (int i = 0; i < n[0]; ++i) {

@@ -111,15 +111,8 @@ RestrictedSurface restricted_surface(const MaskVolume& mask, const MeshingSettin
                                                                params::relative_error_bound = 1e-4, params::p_rng = &random);
   FacetSize size{s.element_size_mm, s.refine_size_mm, {}};
   const auto& d = mask.direction;
-  for (const MeshingSettings::RefineBall& ball : s.refine_balls) {
-    if (!(ball.radius_mm > 0)) continue;
-    FacetSize::Ball b{{}, ball.radius_mm};
-    for (int c = 0; c < 3; ++c) {  // world to grid: the transpose of the direction cosines
-      b.centre[c] = kPad * mask.spacing_mm[c];
-      for (int r = 0; r < 3; ++r) b.centre[c] += d[3 * r + c] * (ball.center_mm[r] - mask.origin_mm[r]);
-    }
-    size.balls.push_back(b);
-  }
+  for (const MeshingSettings::RefineBall& ball : s.refine_balls)
+    if (ball.radius_mm > 0) size.balls.push_back({padded_grid_point(mask, ball.center_mm, kPad), ball.radius_mm});
   const Criteria criteria(params::facet_angle = 25, params::facet_size = size, params::facet_distance = distance_mm);
   Complex complex;
   RestrictedSurface out;

@@ -32,6 +32,17 @@ struct MaskVolume {
   std::vector<std::uint8_t> data;  // 0/1, x fastest
 };
 
+// A point of space (mm) in the frame of the volume's grid padded by `pad` voxels on every side (the
+// CGAL meshers' image): millimetres along the index axes (the transpose of the direction cosines).
+inline std::array<double, 3> padded_grid_point(const MaskVolume& v, const std::array<double, 3>& point_mm, int pad) {
+  std::array<double, 3> g{};
+  for (std::size_t c = 0; c < 3; ++c) {
+    g[c] = pad * v.spacing_mm[c];
+    for (std::size_t r = 0; r < 3; ++r) g[c] += v.direction[3 * r + c] * (point_mm[r] - v.origin_mm[r]);
+  }
+  return g;
+}
+
 struct MeshingSettings {
   double element_size_mm = 4;
   int smoothing_iterations = 20;

@@ -154,11 +154,14 @@ TEST(MeshCommand, TheSameLabelsMeshToTheSameBytesInEveryProcess) {
 }
 
 // Mean edge length (mm) of the tetrahedra whose centres lie within `inner` mm of `point` (mm), and
-// of those beyond `outer` mm from it; the counts in `near` and `far`.
-void edges_about(vtkUnstructuredGrid* grid, const std::array<double, 3>& point, double inner, double outer, double& near_mm,
-                 double& far_mm, long& near, long& far) {
+// of those beyond `outer` mm from it, with their counts.
+struct Edges {
+  double near_mm = 0, far_mm = 0;
+  long near = 0, far = 0;
+};
+Edges edges_about(vtkUnstructuredGrid* grid, const std::array<double, 3>& point, double inner, double outer) {
   double near_sum = 0, far_sum = 0;
-  near = 0, far = 0;
+  long near = 0, far = 0;
   for (vtkIdType c = 0; c < grid->GetNumberOfCells(); ++c) {
     vtkCell* cell = grid->GetCell(c);
     double centre[3] = {0, 0, 0}, length = 0;
@@ -175,7 +178,7 @@ void edges_about(vtkUnstructuredGrid* grid, const std::array<double, 3>& point, 
     if (r_mm < inner) near_sum += length, ++near;
     if (r_mm > outer) far_sum += length, ++far;
   }
-  near_mm = near > 0 ? 1e3 * near_sum / near : 0, far_mm = far > 0 ? 1e3 * far_sum / far : 0;
+  return {near > 0 ? 1e3 * near_sum / near : 0, far > 0 ? 1e3 * far_sum / far : 0, near, far};
 }
 
 TEST(MeshCommand, RefinementNearAPoint) {
@@ -188,15 +191,13 @@ TEST(MeshCommand, RefinementNearAPoint) {
                                   dir / "refined.msh");
   ASSERT_TRUE(j);
   const auto grid = read_tetrahedra(j["vtu"].as<std::string>());
-  double near_mm = 0, far_mm = 0;
-  long near = 0, far = 0;
-  edges_about(grid, {0, 0, 0}, 12, 45, near_mm, far_mm, near, far);
-  ASSERT_GT(near, 0);
-  ASSERT_GT(far, 0);
-  std::printf("mean edge %.2f mm within 12 mm of the point (%ld elements), %.2f mm beyond 45 mm (%ld)\n", near_mm, near,
-              far_mm, far);
-  EXPECT_LT(near_mm, 0.5 * far_mm);
-  EXPECT_LT(near_mm, 3);
+  const Edges one = edges_about(grid, {0, 0, 0}, 12, 45);
+  ASSERT_GT(one.near, 0);
+  ASSERT_GT(one.far, 0);
+  std::printf("mean edge %.2f mm within 12 mm of the point (%ld elements), %.2f mm beyond 45 mm (%ld)\n", one.near_mm,
+              one.near, one.far_mm, one.far);
+  EXPECT_LT(one.near_mm, 0.5 * one.far_mm);
+  EXPECT_LT(one.near_mm, 3);
 
   // Two balls (two probes at the two ends of the sac, as a scene's `refine: {around_probes: true}`
   // makes them): fine elements about each point, coarse between them and about neither.
@@ -205,17 +206,15 @@ TEST(MeshCommand, RefinementNearAPoint) {
                                     dir / "two.msh");
   ASSERT_TRUE(two);
   const auto both = read_tetrahedra(two["vtu"].as<std::string>());
+  const Edges middle = edges_about(both, {0, 0, 0}, 12, 1e9);
+  ASSERT_GT(middle.near, 0);
   for (const double x : {-45.0, 45.0}) {
-    edges_about(both, {x, 0, 0}, 9, 1e9, near_mm, far_mm, near, far);
-    ASSERT_GT(near, 0);
-    double middle_mm = 0, unused = 0;
-    long middle = 0, none = 0;
-    edges_about(both, {0, 0, 0}, 12, 1e9, middle_mm, unused, middle, none);
-    ASSERT_GT(middle, 0);
-    std::printf("two balls: mean edge %.2f mm within 9 mm of x = %.0f mm, %.2f mm within 12 mm of the middle\n", near_mm, x,
-                middle_mm);
-    EXPECT_LT(near_mm, 3);
-    EXPECT_LT(near_mm, 0.5 * middle_mm);
+    const Edges ball = edges_about(both, {x, 0, 0}, 9, 1e9);
+    ASSERT_GT(ball.near, 0);
+    std::printf("two balls: mean edge %.2f mm within 9 mm of x = %.0f mm, %.2f mm within 12 mm of the middle\n", ball.near_mm,
+                x, middle.near_mm);
+    EXPECT_LT(ball.near_mm, 3);
+    EXPECT_LT(ball.near_mm, 0.5 * middle.near_mm);
   }
   // The balls share one size, as a scene's do: a second size is refused by name.
   const auto mixed = run_command(fetouch("mesh " + (dir / "phantom" / "phantom_labels.mha").string() +
