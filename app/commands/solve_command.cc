@@ -21,6 +21,7 @@
 #include "app/json_writer.h"
 #include "app/log.h"
 #include "app/output_guard.h"
+#include "app/peak_memory.h"
 #include "app/scene_mesh.h"
 #include "app/scene_rig.h"
 #include "app/mpi_session.h"
@@ -56,7 +57,8 @@ struct TimeStep {
 
 void write_json(std::ostream& out, const SolveOptions& o, const config::Scene& scene, const fem::TissueModel& model,
                 const fem::SolveReport& report, double seconds, const std::vector<int>& patches,
-                const fs::path& vtu, const fs::path& pvd, const std::vector<TimeStep>& series) {
+                const fs::path& vtu, const fs::path& pvd, const std::vector<TimeStep>& series,
+                const std::vector<double>& peak_memory_mb) {
   JsonWriter json(out);
   fem::QuasiStaticSolver& solver = *model.solver;
   json.begin_object();
@@ -70,6 +72,9 @@ void write_json(std::ostream& out, const SolveOptions& o, const config::Scene& s
   json.key("newton_iterations").value(report.total_iterations);
   json.key("load_step_cuts").value(report.cuts);
   json.key("seconds").value(seconds);
+  json.key("peak_memory_mb").begin_array();
+  for (double mb : peak_memory_mb) json.value(mb);
+  json.end_array();
   json.key("steps").begin_array();
   for (const auto& step : report.steps) {
     json.begin_object();
@@ -280,7 +285,8 @@ int run_solve(const SolveOptions& o) {
   const fs::path vtu = dir / (scene.name + (parallel ? "_0000.pvtu" : ".vtu")), pvd = dir / (scene.name + ".pvd"), summary = dir / "summary.json";
   // The summary is computed once (it assembles to get the reactions) for the file and stdout.
   std::ostringstream json;
-  write_json(json, o, scene, *model, report, seconds, patches, vtu, pvd, series);
+  const std::vector<double> peak_memory_mb = peak_resident_mb_per_rank();  // collective
+  write_json(json, o, scene, *model, report, seconds, patches, vtu, pvd, series, peak_memory_mb);
   json << "\n";
   if (report.converged && frames.empty() && series.empty()) {  // a quasi-static case: its one state
     try {
@@ -311,7 +317,8 @@ int run_solve(const SolveOptions& o) {
   } else {
     std::cout << scene.name << ": " << (report.converged ? "converged" : "FAILED") << " in " << report.total_iterations
               << " Newton iterations (" << report.cuts << " load-step cuts), " << std::setprecision(3) << seconds << " s, "
-              << model->solver->dofs() << " dofs\n";
+              << model->solver->dofs() << " dofs, peak memory " << std::lround(peak_memory_mb.front()) << " MB"
+              << (peak_memory_mb.size() > 1 ? " on rank 0" : "") << "\n";
     if (!report.converged) std::cout << "  why: " << report.failure << "\n";
     else {
       std::cout << "  max displacement " << model->solver->max_displacement() * 1e3 << " mm\n";

@@ -1,12 +1,15 @@
 // `mpirun -np 2 fetouch solve` against the serial `fetouch solve` on the shipped block scene (P1)
 // and a P2 test scene: the same displacements, reactions and probe displacements to the Newton
-// tolerance, the same Newton iterations, the summary saying 2 ranks, and the deformed mesh as a PVTU
-// whose per-rank pieces VTK reads and whose cells add up to the serial VTU's. Label mpi.
+// tolerance, the same Newton iterations, the summary saying 2 ranks and giving each one's peak
+// memory, and the deformed mesh as a PVTU whose per-rank pieces VTK reads and whose cells add up to
+// the serial VTU's. Label mpi.
 #include <gtest/gtest.h>
 #include <vtkSmartPointer.h>
 #include <vtkUnstructuredGrid.h>
 #include <vtkXMLUnstructuredGridReader.h>
 #include <yaml-cpp/yaml.h>
+
+#include <sys/resource.h>
 
 #include <cmath>
 #include <filesystem>
@@ -55,6 +58,18 @@ void expect_same_solve(const std::string& serial_arguments, const std::string& a
   EXPECT_EQ(serial["ranks"].as<int>(), 1);
   EXPECT_EQ(parallel["ranks"].as<int>(), 2);
   EXPECT_EQ(serial["newton_iterations"].as<int>(), parallel["newton_iterations"].as<int>());
+  // Each rank's peak memory, which no rank's can exceed the kernel's own count of the largest process
+  // this test has waited for (the ranks are its descendants): one figure a rank, in MB.
+  rusage children{};
+  ASSERT_EQ(getrusage(RUSAGE_CHILDREN, &children), 0);
+  const double largest_child_mb = static_cast<double>(children.ru_maxrss) / 1024.0;
+  ASSERT_EQ(serial["peak_memory_mb"].size(), 1u);
+  ASSERT_EQ(parallel["peak_memory_mb"].size(), 2u);
+  for (const YAML::Node* run : {&serial, &parallel})
+    for (const auto& mb : (*run)["peak_memory_mb"]) {
+      EXPECT_GT(mb.as<double>(), 10.0);  // the binary and its libraries alone take more
+      EXPECT_LE(mb.as<double>(), largest_child_mb);
+    }
   const auto close = [](const YAML::Node& a, const YAML::Node& b, double scale) {
     for (int d = 0; d < 3; ++d) EXPECT_NEAR(a[d].as<double>(), b[d].as<double>(), 1e-8 * scale);
   };
