@@ -57,9 +57,11 @@ class LinearSystem {
   TangentSystem& tangent() { return tangent_; }
   const TangentSystem& tangent() const { return tangent_; }
   int position(int row, int column) const { return tangent_.position(row, column); }
-  // Where each cell matrix entry (i, j) of cell k goes in the tangent's value array, at
-  // [k n^2 + i n + j]; -1 where the row or the column is constrained.
+  // Where each cell matrix entry (i, j) of cell k goes in the tangent's value array, at [i n + j];
+  // -1 where the row or the column is constrained. Only for the cells this rank assembles
+  // (Discretisation::my_cells). Built on first use, or by build_cell_scatter() (before threads run).
   const int* cell_scatter(unsigned int k) const;
+  void build_cell_scatter() const;
   // Counts set_up() calls: positions in the tangent's value array found under one revision hold
   // until the next.
   int pattern_revision() const { return pattern_revision_; }
@@ -95,7 +97,10 @@ class LinearSystem {
   const Discretisation& d_;
   dealii::AffineConstraints<double> constraints_;
   std::vector<bool> constrained_;
-  mutable std::vector<int> scatter_;  // built on first use
+  // Built on first use, for this rank's cells only (d_.my_cells: all of them on one rank), in their
+  // order; scatter_slot_[k] is cell k's place among them (-1: another rank's).
+  mutable std::vector<int> scatter_;
+  mutable std::vector<int> scatter_slot_;
   // g(x) at each support's dofs, kept from the first apply_supports after set_up.
   mutable std::vector<std::vector<std::pair<dealii::types::global_dof_index, double>>> support_values_;
   int pattern_revision_ = 0;
