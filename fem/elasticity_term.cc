@@ -244,7 +244,7 @@ void ElasticityTerm::plan_threads() const {
 bool ElasticityTerm::assemble(const AssemblyState& state, AssemblyTarget& target) {
   const LinearSystem& system = *target.system;
   material_of(0);                                // per-cell materials, the scatter map and the
-  if (target.tangent) system.build_cell_scatter();  // before the threads run
+  if (target.tangent) system.build_cell_scatter();  // threads' cells are built before the threads run
   if (!planned_) plan_threads();
   const auto run = [&](const std::vector<unsigned int>& cells) {
     return assemble_cells(cells, state.u, target.residual, target.internal, target.tangent, system);
