@@ -84,8 +84,12 @@ void Discretisation::partition() {
   }
   cell_rank = part;
   my_cells.clear();
+  my_slot.assign(cells, -1);
   for (unsigned int k = 0; k < cells; ++k)
-    if (part[k] == unsigned(rank)) my_cells.push_back(k);
+    if (part[k] == unsigned(rank)) {
+      my_slot[k] = static_cast<int>(my_cells.size());
+      my_cells.push_back(k);
+    }
 }
 
 void Discretisation::sum_over_ranks(double* data, std::size_t size) const {

@@ -41,6 +41,7 @@ class Discretisation {
   int rank = 0, ranks = 1;
   std::vector<unsigned int> my_cells;   // indices (in cell order) of the cells this rank assembles
   std::vector<unsigned int> cell_rank;  // the rank of every cell
+  std::vector<int> my_slot;             // cell k's place in my_cells; -1 for another rank's cell
   int owned_begin = 0, owned_end = 0;   // this rank's rows
 
   unsigned int n_dofs() const { return static_cast<unsigned int>(dof.n_dofs()); }

@@ -74,6 +74,7 @@ void InertiaTerm::mass_times(const Vector<double>& x, double* out, double gain, 
   const unsigned int n = c.n, nq = c.nq;
   const bool tangent = target && target->tangent;
   std::vector<double> local(n), cell_out(n), cell_matrix(std::size_t(n) * n);
+  if (tangent) target->system->build_cell_scatter();
   for (const unsigned int k : d_.my_cells) {
     const types::global_dof_index* indices = &c.indices[std::size_t(k) * n];
     d_.gather(k, x, local.data());

@@ -58,22 +58,20 @@ void LinearSystem::set_up(const std::vector<Support>& supports, TangentSystem::M
                        space.node_block);
   y_current_ = false;
   scatter_.clear();
-  scatter_slot_.clear();
   support_values_.clear();
   ++pattern_revision_;
 }
 
 // n x n ints a cell (576 bytes for P1: 287 MB at 522,240 cells), so only for this rank's cells.
 void LinearSystem::build_cell_scatter() const {
-  if (!scatter_slot_.empty()) return;  // built once per set of supports
   const Discretisation::Cells& c = d_.cells();
   const unsigned int n = c.n;
   const std::vector<unsigned int>& mine = d_.my_cells;
-  scatter_slot_.assign(d_.n_cells(), -1);
+  if (scatter_stride_ == std::size_t(n) * n && scatter_.size() == mine.size() * n * n) return;  // once per set_up
+  scatter_stride_ = std::size_t(n) * n;
   scatter_.resize(mine.size() * n * n);
   for (std::size_t slot = 0; slot < mine.size(); ++slot) {
     const unsigned int cell = mine[slot];
-    scatter_slot_[cell] = static_cast<int>(slot);
     const types::global_dof_index* indices = &c.indices[std::size_t(cell) * n];
     int* out = &scatter_[slot * n * n];
     for (unsigned int i = 0; i < n; ++i)
@@ -82,14 +80,6 @@ void LinearSystem::build_cell_scatter() const {
                              ? -1
                              : tangent_.position(static_cast<int>(indices[i]), static_cast<int>(indices[j]));
   }
-}
-
-const int* LinearSystem::cell_scatter(unsigned int k) const {
-  build_cell_scatter();
-  const int slot = scatter_slot_[k];
-  if (slot < 0) throw std::logic_error("a cell matrix of a cell another rank assembles");
-  const unsigned int n = d_.cells().n;
-  return &scatter_[std::size_t(slot) * n * n];
 }
 
 // g(x) at the supports' dofs is interpolated once per set_up (deal.II's interpolation visits every

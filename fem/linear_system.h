@@ -12,6 +12,7 @@
 
 #include <array>
 #include <functional>
+#include <stdexcept>
 #include <vector>
 
 #include "fem/discretisation.h"
@@ -59,8 +60,14 @@ class LinearSystem {
   int position(int row, int column) const { return tangent_.position(row, column); }
   // Where each cell matrix entry (i, j) of cell k goes in the tangent's value array, at [i n + j];
   // -1 where the row or the column is constrained. Only for the cells this rank assembles
-  // (Discretisation::my_cells). Built on first use, or by build_cell_scatter() (before threads run).
-  const int* cell_scatter(unsigned int k) const;
+  // (Discretisation::my_cells), and only after build_cell_scatter(): a loop over cells calls it
+  // once before it starts (before its threads run).
+  const int* cell_scatter(unsigned int k) const {
+    const int slot = d_.my_slot[k];
+    if (slot < 0 || std::size_t(slot) * scatter_stride_ >= scatter_.size())
+      throw std::logic_error("a cell matrix of a cell another rank assembles, or before build_cell_scatter()");
+    return &scatter_[std::size_t(slot) * scatter_stride_];
+  }
   void build_cell_scatter() const;
   // Counts set_up() calls: positions in the tangent's value array found under one revision hold
   // until the next.
@@ -97,10 +104,10 @@ class LinearSystem {
   const Discretisation& d_;
   dealii::AffineConstraints<double> constraints_;
   std::vector<bool> constrained_;
-  // Built on first use, for this rank's cells only (d_.my_cells: all of them on one rank), in their
-  // order; scatter_slot_[k] is cell k's place among them (-1: another rank's).
+  // Built by build_cell_scatter(), for this rank's cells only (d_.my_cells: all of them on one
+  // rank), in their order (Discretisation::my_slot), scatter_stride_ ints a cell.
   mutable std::vector<int> scatter_;
-  mutable std::vector<int> scatter_slot_;
+  mutable std::size_t scatter_stride_ = 0;
   // g(x) at each support's dofs, kept from the first apply_supports after set_up.
   mutable std::vector<std::vector<std::pair<dealii::types::global_dof_index, double>>> support_values_;
   int pattern_revision_ = 0;
