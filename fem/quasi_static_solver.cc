@@ -69,6 +69,18 @@ std::vector<Discretisation::Piece> QuasiStaticSolver::pieces() {
 unsigned int QuasiStaticSolver::dofs() const { return impl_->d.n_dofs(); }
 unsigned int QuasiStaticSolver::cells() const { return impl_->d.n_cells(); }
 
+std::vector<QuasiStaticSolver::Share> QuasiStaticSolver::shares() const {
+  const Discretisation& d = impl_->d;
+  const unsigned int mine[2] = {static_cast<unsigned int>(d.my_cells.size()),
+                                static_cast<unsigned int>(d.owned_end - d.owned_begin)};
+  std::vector<unsigned int> all(2 * std::size_t(d.ranks));
+  if (d.ranks == 1) std::copy(mine, mine + 2, all.begin());
+  else MPI_Allgather(mine, 2, MPI_UNSIGNED, all.data(), 2, MPI_UNSIGNED, d.comm);
+  std::vector<Share> shares(d.ranks);
+  for (int r = 0; r < d.ranks; ++r) shares[r] = {all[2 * r], all[2 * r + 1]};
+  return shares;
+}
+
 std::vector<std::string> QuasiStaticSolver::terms() const {
   std::vector<std::string> names;
   for (const Term* term : impl_->driver.terms()) names.emplace_back(term->name());

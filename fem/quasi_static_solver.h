@@ -156,6 +156,12 @@ class QuasiStaticSolver {
 
   unsigned int dofs() const;
   unsigned int cells() const;
+  // What each rank holds of the partition, in rank order, on every rank (collective): the cells it
+  // assembles and the tangent rows (dofs) it owns.
+  struct Share {
+    unsigned int cells = 0, dofs = 0;
+  };
+  std::vector<Share> shares() const;
   // The body's pieces and the rigid motions its supports leave free on each (Discretisation::pieces):
   // a piece with a free motion is not held, and a load on it has no equilibrium.
   std::vector<Discretisation::Piece> pieces();

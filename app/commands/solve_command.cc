@@ -55,10 +55,28 @@ struct TimeStep {
   dealii::Tensor<1, 3> probe_displacement;  // the first probe's, if any
 };
 
+// "cells 1,2 / dofs 3,4 per rank: the largest share 0.1 % / 2.0 % above the mean".
+std::string partition_line(const std::vector<fem::QuasiStaticSolver::Share>& shares) {
+  std::ostringstream line;
+  double cells_max = 0, cells_sum = 0, dofs_max = 0, dofs_sum = 0;
+  std::string cells, dofs;
+  for (const auto& share : shares) {
+    cells += (cells.empty() ? "" : ", ") + std::to_string(share.cells);
+    dofs += (dofs.empty() ? "" : ", ") + std::to_string(share.dofs);
+    cells_max = std::max(cells_max, double(share.cells)), cells_sum += share.cells;
+    dofs_max = std::max(dofs_max, double(share.dofs)), dofs_sum += share.dofs;
+  }
+  const double n = static_cast<double>(shares.size());
+  line << "owned cells " << cells << ", owned dofs " << dofs << " by rank: the largest share " << std::fixed
+       << std::setprecision(1) << 100 * (cells_max * n / cells_sum - 1) << " % (cells) and "
+       << 100 * (dofs_max * n / dofs_sum - 1) << " % (dofs) above the mean";
+  return line.str();
+}
+
 void write_json(std::ostream& out, const SolveOptions& o, const config::Scene& scene, const fem::TissueModel& model,
                 const fem::SolveReport& report, double seconds, const std::vector<int>& patches,
                 const fs::path& vtu, const fs::path& pvd, const std::vector<TimeStep>& series,
-                const std::vector<double>& peak_memory_mb) {
+                const std::vector<double>& peak_memory_mb, const std::vector<fem::QuasiStaticSolver::Share>& shares) {
   JsonWriter json(out);
   fem::QuasiStaticSolver& solver = *model.solver;
   json.begin_object();
@@ -74,6 +92,12 @@ void write_json(std::ostream& out, const SolveOptions& o, const config::Scene& s
   json.key("seconds").value(seconds);
   json.key("peak_memory_mb").begin_array();
   for (double mb : peak_memory_mb) json.value(mb);
+  json.end_array();
+  json.key("owned_cells").begin_array();
+  for (const auto& share : shares) json.value(static_cast<long>(share.cells));
+  json.end_array();
+  json.key("owned_dofs").begin_array();
+  for (const auto& share : shares) json.value(static_cast<long>(share.dofs));
   json.end_array();
   json.key("steps").begin_array();
   for (const auto& step : report.steps) {
@@ -286,7 +310,8 @@ int run_solve(const SolveOptions& o) {
   // The summary is computed once (it assembles to get the reactions) for the file and stdout.
   std::ostringstream json;
   const std::vector<double> peak_memory_mb = peak_resident_mb_per_rank();  // collective
-  write_json(json, o, scene, *model, report, seconds, patches, vtu, pvd, series, peak_memory_mb);
+  const auto shares = model->solver->shares();                             // collective
+  write_json(json, o, scene, *model, report, seconds, patches, vtu, pvd, series, peak_memory_mb, shares);
   json << "\n";
   if (report.converged && frames.empty() && series.empty()) {  // a quasi-static case: its one state
     try {
@@ -319,6 +344,7 @@ int run_solve(const SolveOptions& o) {
               << " Newton iterations (" << report.cuts << " load-step cuts), " << std::setprecision(3) << seconds << " s, "
               << model->solver->dofs() << " dofs, peak memory " << std::lround(peak_memory_mb.front()) << " MB"
               << (peak_memory_mb.size() > 1 ? " on rank 0" : "") << "\n";
+    if (parallel) std::cout << "  " << partition_line(shares) << "\n";
     if (!report.converged) std::cout << "  why: " << report.failure << "\n";
     else {
       std::cout << "  max displacement " << model->solver->max_displacement() * 1e3 << " mm\n";

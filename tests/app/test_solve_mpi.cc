@@ -1,7 +1,7 @@
 // `mpirun -np 2 fetouch solve` against the serial `fetouch solve` on the shipped block scene (P1)
 // and a P2 test scene: the same displacements, reactions and probe displacements to the Newton
 // tolerance, the same Newton iterations, the summary saying 2 ranks and giving each one's peak
-// memory, and the deformed mesh as a PVTU whose per-rank pieces VTK reads and whose cells add up to
+// memory and share of cells and dofs (balanced), and the deformed mesh as a PVTU whose per-rank pieces VTK reads and whose cells add up to
 // the serial VTU's. Label mpi.
 #include <gtest/gtest.h>
 #include <vtkSmartPointer.h>
@@ -15,6 +15,8 @@
 #include <filesystem>
 #include <fstream>
 #include <iterator>
+#include <tuple>
+#include <vector>
 
 #include "tests/support/run_command.h"
 
@@ -28,9 +30,11 @@ YAML::Node solve(const std::string& launcher, const std::string& arguments) {
 }
 
 // The parallel output: a PVTU naming one VTU piece per rank, whose cells add up to the serial mesh's.
-void expect_pieces(const std::filesystem::path& dir, const std::string& name, long serial_cells) {
+// Returns each piece's cells.
+std::vector<long> expect_pieces(const std::filesystem::path& dir, const std::string& name, long serial_cells) {
+  std::vector<long> pieces;
   std::ifstream pvtu(dir / (name + "_0000.pvtu"));
-  ASSERT_TRUE(pvtu) << "no " << name << "_0000.pvtu in " << dir.string();
+  EXPECT_TRUE(pvtu) << "no " << name << "_0000.pvtu in " << dir.string();
   const std::string text((std::istreambuf_iterator<char>(pvtu)), std::istreambuf_iterator<char>());
   long cells = 0;
   for (int rank = 0; rank < 2; ++rank) {
@@ -39,9 +43,25 @@ void expect_pieces(const std::filesystem::path& dir, const std::string& name, lo
     auto reader = vtkSmartPointer<vtkXMLUnstructuredGridReader>::New();
     reader->SetFileName((dir / piece).string().c_str());
     reader->Update();
-    cells += reader->GetOutput()->GetNumberOfCells();
+    pieces.push_back(reader->GetOutput()->GetNumberOfCells());
+    cells += pieces.back();
   }
   EXPECT_EQ(cells, serial_cells);
+  return pieces;
+}
+
+// The partition the summary reports: one share a rank, adding up to the whole, the cells within 5 %
+// of each other and the dofs within 10 % (issue 40), and each rank's cells those of its VTU piece.
+void expect_balanced(const YAML::Node& parallel, const std::vector<long>& pieces) {
+  ASSERT_EQ(parallel["owned_cells"].size(), 2u);
+  ASSERT_EQ(parallel["owned_dofs"].size(), 2u);
+  for (const auto& [key, total, spread] : {std::tuple{"owned_cells", "cells", 0.05}, std::tuple{"owned_dofs", "dofs", 0.10}}) {
+    const long a = parallel[key][0].as<long>(), b = parallel[key][1].as<long>();
+    EXPECT_EQ(a + b, parallel[total].as<long>()) << key;
+    EXPECT_LE(std::abs(a - b), spread * std::max(a, b)) << key << ": " << a << " and " << b;
+  }
+  for (std::size_t rank = 0; rank < pieces.size() && rank < 2; ++rank)
+    EXPECT_EQ(parallel["owned_cells"][rank].as<long>(), pieces[rank]) << "rank " << rank;
 }
 
 void expect_same_solve(const std::string& serial_arguments, const std::string& arguments) {
@@ -52,7 +72,8 @@ void expect_same_solve(const std::string& serial_arguments, const std::string& a
   auto serial_grid = vtkSmartPointer<vtkXMLUnstructuredGridReader>::New();
   serial_grid->SetFileName(serial["vtu"].as<std::string>().c_str());
   serial_grid->Update();
-  expect_pieces(pvtu.parent_path(), stem, serial_grid->GetOutput()->GetNumberOfCells());
+  const std::vector<long> pieces = expect_pieces(pvtu.parent_path(), stem, serial_grid->GetOutput()->GetNumberOfCells());
+  expect_balanced(parallel, pieces);
   ASSERT_TRUE(serial["converged"].as<bool>());
   ASSERT_TRUE(parallel["converged"].as<bool>());
   EXPECT_EQ(serial["ranks"].as<int>(), 1);
