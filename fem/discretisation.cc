@@ -267,9 +267,11 @@ void Discretisation::build_cells() const {
     c.base[i] = fe->system_to_component_index(i).second;
   }
   const unsigned int cells = tria.n_active_cells();
-  c.indices.resize(std::size_t(cells) * c.n);
-  c.jxw.resize(std::size_t(cells) * c.nq);
-  c.gradients.resize(std::size_t(cells) * c.nq * c.nbase);
+  const std::size_t mine = my_cells.size();
+  c.slot = my_slot.data();
+  c.indices.resize(mine * c.n);
+  c.jxw.resize(mine * c.nq);
+  c.gradients.resize(mine * c.nq * c.nbase);
   c.shape_values.resize(std::size_t(c.nq) * c.nbase);
   c.material_id.resize(cells);
   for (unsigned int q = 0; q < c.nq; ++q)
@@ -279,30 +281,31 @@ void Discretisation::build_cells() const {
   std::vector<types::global_dof_index> local(c.n);
   unsigned int k = 0;
   for (const auto& cell : dof.active_cell_iterators()) {
+    c.material_id[k] = cell->material_id();
+    const int slot = my_slot[k++];
+    if (slot < 0) continue;
     values.reinit(cell);
     cell->get_dof_indices(local);
-    c.material_id[k] = cell->material_id();
-    std::copy(local.begin(), local.end(), c.indices.begin() + std::size_t(k) * c.n);
+    std::copy(local.begin(), local.end(), c.indices.begin() + std::size_t(slot) * c.n);
     for (unsigned int q = 0; q < c.nq; ++q) {
-      c.jxw[std::size_t(k) * c.nq + q] = values.JxW(q);
+      c.jxw[std::size_t(slot) * c.nq + q] = values.JxW(q);
       for (unsigned int b = 0; b < c.nbase; ++b)
-        c.gradients[(std::size_t(k) * c.nq + q) * c.nbase + b] =
+        c.gradients[(std::size_t(slot) * c.nq + q) * c.nbase + b] =
             values.shape_grad_component(fe->component_to_system_index(0, b), q, 0);
     }
-    ++k;
   }
   cells_built_ = true;
 }
 
 void Discretisation::gather(unsigned int k, const Vector<double>& global, double* local) const {
   const Cells& c = cells();
-  const types::global_dof_index* indices = &c.indices[std::size_t(k) * c.n];
+  const types::global_dof_index* indices = c.dofs(k);
   for (unsigned int i = 0; i < c.n; ++i) local[i] = global[indices[i]];
 }
 
 Tensor2 Discretisation::deformation_gradient(unsigned int k, unsigned int q, const double* u_local) const {
   const Cells& c = cells();
-  const Tensor<1, 3>* grad = &c.gradients[(std::size_t(k) * c.nq + q) * c.nbase];
+  const Tensor<1, 3>* grad = c.gradients_at(k, q);
   Tensor2 F;
   for (unsigned int i = 0; i < c.n; ++i)
     for (int J = 0; J < 3; ++J) F[c.component[i]][J] += u_local[i] * grad[c.base[i]][J];

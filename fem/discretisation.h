@@ -75,22 +75,32 @@ class Discretisation {
   };
   std::vector<Piece> pieces(const std::vector<bool>& constrained) const;
 
-  // The per-cell data of a total Lagrangian assembly (built on first use; cell order).
+  // The per-cell data of a total Lagrangian assembly (built on first use), kept for the cells this
+  // rank assembles only (my_cells, in their order: all cells on one rank); cell k's is at its slot
+  // (my_slot[k]), which dofs(k), jxw(k, q) and gradients(k, q) look up. Asking for another rank's
+  // cell is a logic error (unchecked: the assembly's inner loop asks).
   struct Cells {
     unsigned int n = 0, nq = 0, nbase = 0;       // dofs per cell, quadrature points, scalar base functions
     std::vector<unsigned int> component, base;   // of each cell dof
-    std::vector<dealii::types::global_dof_index> indices;  // [cell][i]
-    std::vector<double> jxw;                     // [cell][q]
-    std::vector<dealii::Tensor<1, 3>> gradients;  // [cell][q][base], reference
+    std::vector<dealii::types::global_dof_index> indices;  // [slot][i]
+    std::vector<double> jxw;                     // [slot][q]
+    std::vector<dealii::Tensor<1, 3>> gradients;  // [slot][q][base], reference
     std::vector<double> shape_values;            // [q][base], the same on every cell
-    std::vector<dealii::types::material_id> material_id;  // [cell]
+    std::vector<dealii::types::material_id> material_id;  // [cell], every cell's
+    const int* slot = nullptr;                   // Discretisation::my_slot
+
+    const dealii::types::global_dof_index* dofs(unsigned int k) const { return &indices[std::size_t(slot[k]) * n]; }
+    double jxw_at(unsigned int k, unsigned int q) const { return jxw[std::size_t(slot[k]) * nq + q]; }
+    const dealii::Tensor<1, 3>* gradients_at(unsigned int k, unsigned int q) const {
+      return &gradients[(std::size_t(slot[k]) * nq + q) * nbase];
+    }
   };
   const Cells& cells() const {
     if (!cells_built_) build_cells();
     return cells_;
   }
 
-  // Cell k's entries of a global vector.
+  // Cell k's entries of a global vector (k one of my_cells).
   void gather(unsigned int k, const dealii::Vector<double>& global, double* local) const;
   // F = I + grad u at quadrature point q of cell k, from the cell's local displacements.
   Tensor2 deformation_gradient(unsigned int k, unsigned int q, const double* u_local) const;

@@ -77,11 +77,11 @@ bool ElasticityTerm::assemble_fixed(const std::vector<unsigned int>& cells, cons
   Tensor2 P;
   Tensor4 A;
   for (const unsigned int k : cells) {
-    const types::global_dof_index* indices = &c.indices[std::size_t(k) * N];
+    const types::global_dof_index* indices = c.dofs(k);
     const Material& material = material_of(k);
     for (int i = 0; i < N; ++i) u_local[i] = u[indices[i]];
     for (unsigned int q = 0; q < nq; ++q) {
-      const Tensor<1, 3>* grad = &c.gradients[(std::size_t(k) * nq + q) * NB];
+      const Tensor<1, 3>* grad = c.gradients_at(k, q);
       Tensor2& F = F_at[q];
       F = 0;
       for (int i = 0; i < N; ++i)
@@ -97,7 +97,7 @@ bool ElasticityTerm::assemble_fixed(const std::vector<unsigned int>& cells, cons
     if (dilatation) {
       double volume = 0;
       for (unsigned int q = 0; q < nq; ++q) {
-        const double jxw = c.jxw[std::size_t(k) * nq + q];
+        const double jxw = c.jxw_at(k, q);
         const double j = determinant(F_at[q]);
         if (!(j > 0)) return false;
         volume += j * jxw;
@@ -107,8 +107,8 @@ bool ElasticityTerm::assemble_fixed(const std::vector<unsigned int>& cells, cons
       volume_gradient.fill(0);
     }
     for (unsigned int q = 0; q < nq; ++q) {
-      const Tensor<1, 3>* grad = &c.gradients[(std::size_t(k) * nq + q) * NB];
-      const double jxw = c.jxw[std::size_t(k) * nq + q];
+      const Tensor<1, 3>* grad = c.gradients_at(k, q);
+      const double jxw = c.jxw_at(k, q);
       const Tensor2& F = F_at[q];
       if (!material.evaluate(F, P, tangent ? &A : nullptr)) return false;
       if (dilatation) {
@@ -233,10 +233,10 @@ void ElasticityTerm::plan_threads() const {
   for (std::size_t i = 0; i < order.size(); ++i) side[order[i]] = i < order.size() / 2 ? 1 : 2;
   const Discretisation::Cells& c = d_.cells();
   for (const unsigned int k : mine)
-    for (unsigned int i = 0; i < c.n; ++i) touched[c.indices[std::size_t(k) * c.n + i]] |= side[k];
+    for (unsigned int i = 0; i < c.n; ++i) touched[c.dofs(k)[i]] |= side[k];
   for (const unsigned int k : mine) {  // in cell order, as one thread would take them
     bool shared = false;
-    for (unsigned int i = 0; i < c.n && !shared; ++i) shared = touched[c.indices[std::size_t(k) * c.n + i]] == 3;
+    for (unsigned int i = 0; i < c.n && !shared; ++i) shared = touched[c.dofs(k)[i]] == 3;
     plan_[shared ? 2 : side[k] - 1].push_back(k);
   }
 }

@@ -72,7 +72,7 @@ void LinearSystem::build_cell_scatter() const {
   scatter_.resize(mine.size() * n * n);
   for (std::size_t slot = 0; slot < mine.size(); ++slot) {
     const unsigned int cell = mine[slot];
-    const types::global_dof_index* indices = &c.indices[std::size_t(cell) * n];
+    const types::global_dof_index* indices = c.dofs(cell);
     int* out = &scatter_[slot * n * n];
     for (unsigned int i = 0; i < n; ++i)
       for (unsigned int j = 0; j < n; ++j)

@@ -168,7 +168,9 @@ class QuasiStaticSolver {
   // The terms a solve assembles, in order (elasticity always; the others only once asked for).
   std::vector<std::string> terms() const;
 
-  // Per-cell figures of the current state (averages over the cell's quadrature points).
+  // Per-cell figures of the current state (averages over the cell's quadrature points), every
+  // cell's, in cell order (collective under MPI: each rank computes its own cells', and every rank
+  // calls it).
   struct CellFields {
     std::vector<double> jacobian;   // J = det F
     std::vector<double> von_mises;  // of the Cauchy stress, Pa

@@ -49,19 +49,20 @@ void fill_output(const QuasiStaticSolver::Impl& m, const QuasiStaticSolver::Cell
 
 }  // namespace
 
+// Each rank's own cells (the per-cell data it keeps), gathered onto every rank in cell order.
 QuasiStaticSolver::CellFields QuasiStaticSolver::cell_fields() const {
   const Impl& m = *impl_;
-  const Discretisation::Cells& c = m.d.cells();
-  const unsigned int cells = m.d.n_cells(), nq = c.nq;
-  CellFields fields;
-  fields.jacobian.reserve(cells);
-  fields.von_mises.reserve(cells);
+  const Discretisation& d = m.d;
+  const Discretisation::Cells& c = d.cells();
+  const unsigned int nq = c.nq;
+  std::vector<double> mine;  // [slot][jacobian, von Mises]
+  mine.reserve(2 * d.my_cells.size());
   std::vector<double> u_local(c.n);
-  for (unsigned int k = 0; k < cells; ++k) {
-    m.d.gather(k, m.u, u_local.data());
+  for (const unsigned int k : d.my_cells) {
+    d.gather(k, m.u, u_local.data());
     double j_sum = 0, vm_sum = 0;
     for (unsigned int q = 0; q < nq; ++q) {
-      const Tensor2 F = m.d.deformation_gradient(k, q, u_local.data());
+      const Tensor2 F = d.deformation_gradient(k, q, u_local.data());
       const double j = determinant(F);
       j_sum += j;
       Tensor2 P;
@@ -71,8 +72,31 @@ QuasiStaticSolver::CellFields QuasiStaticSolver::cell_fields() const {
         vm_sum += std::sqrt(1.5 * scalar_product(dev, dev));
       }
     }
-    fields.jacobian.push_back(j_sum / nq);
-    fields.von_mises.push_back(vm_sum / nq);
+    mine.push_back(j_sum / nq);
+    mine.push_back(vm_sum / nq);
+  }
+  std::vector<double> all;
+  std::vector<int> start(d.ranks + 1, 0);
+  if (d.ranks == 1) {
+    all = std::move(mine);
+  } else {
+    std::vector<int> counts(d.ranks);
+    const int count = static_cast<int>(mine.size());
+    MPI_Allgather(&count, 1, MPI_INT, counts.data(), 1, MPI_INT, d.comm);
+    for (int r = 0; r < d.ranks; ++r) start[r + 1] = start[r] + counts[r];
+    all.resize(start[d.ranks]);
+    MPI_Allgatherv(mine.data(), count, MPI_DOUBLE, all.data(), counts.data(), start.data(), MPI_DOUBLE, d.comm);
+  }
+  const unsigned int cells = d.n_cells();
+  CellFields fields;
+  fields.jacobian.resize(cells);
+  fields.von_mises.resize(cells);
+  std::vector<int> next(start.begin(), start.end() - 1);  // each rank's next cell among its own
+  for (unsigned int k = 0; k < cells; ++k) {
+    int& at = next[d.ranks == 1 ? 0 : d.cell_rank[k]];
+    fields.jacobian[k] = all[at];
+    fields.von_mises[k] = all[at + 1];
+    at += 2;
   }
   return fields;
 }
