@@ -1,7 +1,8 @@
 // `fetouch replay` under MPI (issue 6): all ranks step the solver together, rank 0 runs the session.
 // On 2 ranks the block poke renders the serial run's forces (the parallel solve differs only by
 // round-off: the tolerance is 1e-6 of the force), and its deformed meshes (a piece per rank,
-// gathered by PVTUs listed in the PVD) hold the serial mesh's cells and displacements.
+// gathered by PVTUs listed in the PVD) hold the serial mesh's cells and displacements; the default
+// scene and the two-user scene render the serial forces too.
 #include <gtest/gtest.h>
 #include <vtkNew.h>
 #include <vtkUnstructuredGrid.h>
@@ -60,6 +61,50 @@ TEST(ReplayMpi, TwoRanksRenderTheSerialForcesAndWriteThePieces) {
   EXPECT_NEAR(u2, u1, 1e-6 * u1);
   EXPECT_NE(read_file_text(dir / "parallel" / "block_press.pvd").find("mesh/block_press_0040.pvtu"), std::string::npos);
   fs::remove_all(dir);
+}
+
+// Issue 40: on the default scene (the anatomy, its fluid-filled sac) and on the two-user scene
+// (two probes, each feeling the other through the condensed coupling) every device's lockstep
+// force on 2 ranks is the 1-rank force to 1e-7 of the largest force. One rank factorises by
+// CHOLMOD and two by MUMPS, and a frame's solves stop at their tolerances, so the runs agree to
+// those, not to round-off: measured 1.1e-8 (default scene) and 2.1e-9 / 5.2e-9 (the two users'
+// devices) on 2026-11-30, the same with Newton's tolerance at 1e-11 instead of the scenes' 1e-8.
+// Issue 40 asks 1e-9; the note on it says where the rest comes from.
+void expect_same_forces(const std::string& scene_file, std::size_t devices) {
+  SCOPED_TRACE(scene_file);
+  const fs::path dir = fs::temp_directory_path() / ("fetouch_replay_mpi_forces_" + std::to_string(::getpid()));
+  fs::remove_all(dir);
+  const std::string args = " --mesh-every 0 " + std::string(FETOUCH_SOURCE_DIR) + "/config/scenes/" + scene_file + " --out ";
+  const auto serial = run_command(fetouch("replay" + args + (dir / "serial").string()));
+  ASSERT_EQ(serial.exit_code, 0) << serial.err;
+  const auto parallel = run_command(std::string(FETOUCH_MPIEXEC) + " --allow-run-as-root --oversubscribe -np 2 " +
+                                    fetouch("replay" + args + (dir / "parallel").string()));
+  ASSERT_EQ(parallel.exit_code, 0) << parallel.err;
+  const auto one = app::read_recording(dir / "serial" / "recording.h5").devices;
+  const auto two = app::read_recording(dir / "parallel" / "recording.h5").devices;
+  ASSERT_EQ(one.size(), devices);
+  ASSERT_EQ(two.size(), devices);
+  for (std::size_t d = 0; d < devices; ++d) {
+    const auto& a = one[d].samples;
+    const auto& b = two[d].samples;
+    ASSERT_GT(a.size(), 1000u);
+    ASSERT_EQ(b.size(), a.size());
+    double largest = 0, difference = 0;
+    for (std::size_t k = 0; k < a.size(); ++k) {
+      largest = std::max(largest, a[k].force.norm());
+      difference = std::max(difference, (a[k].force - b[k].force).norm());
+    }
+    std::printf("%s, device %zu: largest force %.6f N; largest difference between 1 and 2 ranks %.3g N (%.3g of it)\n",
+                scene_file.c_str(), d, largest, difference, difference / largest);
+    EXPECT_GT(largest, 0.1);
+    EXPECT_LE(difference, 1e-7 * largest) << "device " << d;
+  }
+  fs::remove_all(dir);
+}
+
+TEST(ReplayMpi, TwoRanksRenderTheSerialForcesOnTheAnatomyAndForTwoUsers) {
+  expect_same_forces("fetus_phantom.yaml", 1);
+  expect_same_forces("fetus_two_users.yaml", 2);
 }
 
 }  // namespace
