@@ -16,6 +16,7 @@
 #include <deal.II/lac/vector.h>
 #include <mpi.h>
 
+#include <cassert>
 #include <memory>
 #include <string>
 #include <vector>
@@ -89,10 +90,14 @@ class Discretisation {
     std::vector<dealii::types::material_id> material_id;  // [cell], every cell's
     const int* slot = nullptr;                   // Discretisation::my_slot
 
-    const dealii::types::global_dof_index* dofs(unsigned int k) const { return &indices[std::size_t(slot[k]) * n]; }
-    double jxw_at(unsigned int k, unsigned int q) const { return jxw[std::size_t(slot[k]) * nq + q]; }
+    std::size_t at(unsigned int k) const {
+      assert(slot[k] >= 0);
+      return static_cast<std::size_t>(slot[k]);
+    }
+    const dealii::types::global_dof_index* dofs(unsigned int k) const { return &indices[at(k) * n]; }
+    double jxw_at(unsigned int k, unsigned int q) const { return jxw[at(k) * nq + q]; }
     const dealii::Tensor<1, 3>* gradients_at(unsigned int k, unsigned int q) const {
-      return &gradients[(std::size_t(slot[k]) * nq + q) * nbase];
+      return &gradients[(at(k) * nq + q) * nbase];
     }
   };
   const Cells& cells() const {

@@ -11,6 +11,7 @@
 
 #include <cmath>
 #include <filesystem>
+#include <utility>
 
 #include "app/recording.h"
 #include "tests/support/run_command.h"
@@ -20,6 +21,17 @@ namespace fetouch::testing {
 namespace {
 
 namespace fs = std::filesystem;
+
+// The largest force of run a's device series, and the largest difference between a's and b's.
+template <class Samples>
+std::pair<double, double> largest_and_difference(const Samples& a, const Samples& b) {
+  double largest = 0, difference = 0;
+  for (std::size_t k = 0; k < a.size() && k < b.size(); ++k) {
+    largest = std::max(largest, a[k].force.norm());
+    difference = std::max(difference, (a[k].force - b[k].force).norm());
+  }
+  return {largest, difference};
+}
 
 TEST(ReplayMpi, TwoRanksRenderTheSerialForcesAndWriteThePieces) {
   const fs::path dir = fs::temp_directory_path() / ("fetouch_replay_mpi_" + std::to_string(::getpid()));
@@ -37,11 +49,7 @@ TEST(ReplayMpi, TwoRanksRenderTheSerialForcesAndWriteThePieces) {
   const auto b = app::read_recording(dir / "parallel" / "recording.h5").devices.at(0).samples;
   ASSERT_EQ(a.size(), 3001u);
   ASSERT_EQ(b.size(), a.size());
-  double largest = 0, difference = 0;
-  for (std::size_t k = 0; k < a.size(); ++k) {
-    largest = std::max(largest, a[k].force.norm());
-    difference = std::max(difference, (a[k].force - b[k].force).norm());
-  }
+  const auto [largest, difference] = largest_and_difference(a, b);
   std::printf("largest force %.6f N; largest difference between 1 and 2 ranks %.3g N\n", largest, difference);
   EXPECT_GT(largest, 1.0);
   EXPECT_LE(difference, 1e-6 * largest);
@@ -89,11 +97,7 @@ void expect_same_forces(const std::string& scene_file, std::size_t devices) {
     const auto& b = two[d].samples;
     ASSERT_GT(a.size(), 1000u);
     ASSERT_EQ(b.size(), a.size());
-    double largest = 0, difference = 0;
-    for (std::size_t k = 0; k < a.size(); ++k) {
-      largest = std::max(largest, a[k].force.norm());
-      difference = std::max(difference, (a[k].force - b[k].force).norm());
-    }
+    const auto [largest, difference] = largest_and_difference(a, b);
     std::printf("%s, device %zu: largest force %.6f N; largest difference between 1 and 2 ranks %.3g N (%.3g of it)\n",
                 scene_file.c_str(), d, largest, difference, difference / largest);
     EXPECT_GT(largest, 0.1);
