@@ -305,7 +305,7 @@ void Discretisation::gather(unsigned int k, const Vector<double>& global, double
 
 Tensor2 Discretisation::deformation_gradient(unsigned int k, unsigned int q, const double* u_local) const {
   const Cells& c = cells();
-  const Tensor<1, 3>* grad = c.gradients_at(k, q);
+  const Tensor<1, 3>* grad = c.gradients_of(k) + q * c.nbase;
   Tensor2 F;
   for (unsigned int i = 0; i < c.n; ++i)
     for (int J = 0; J < 3; ++J) F[c.component[i]][J] += u_local[i] * grad[c.base[i]][J];

@@ -78,7 +78,7 @@ class Discretisation {
 
   // The per-cell data of a total Lagrangian assembly (built on first use), kept for the cells this
   // rank assembles only (my_cells, in their order: all cells on one rank); cell k's is at its slot
-  // (my_slot[k]), which dofs(k), jxw(k, q) and gradients(k, q) look up. Asking for another rank's
+  // (my_slot[k]), which dofs(k), jxw_of(k) ([q]) and gradients_of(k) ([q * nbase + base]) look up. Asking for another rank's
   // cell is a logic error (unchecked: the assembly's inner loop asks).
   struct Cells {
     unsigned int n = 0, nq = 0, nbase = 0;       // dofs per cell, quadrature points, scalar base functions
@@ -95,10 +95,8 @@ class Discretisation {
       return static_cast<std::size_t>(slot[k]);
     }
     const dealii::types::global_dof_index* dofs(unsigned int k) const { return &indices[at(k) * n]; }
-    double jxw_at(unsigned int k, unsigned int q) const { return jxw[at(k) * nq + q]; }
-    const dealii::Tensor<1, 3>* gradients_at(unsigned int k, unsigned int q) const {
-      return &gradients[(at(k) * nq + q) * nbase];
-    }
+    const double* jxw_of(unsigned int k) const { return &jxw[at(k) * nq]; }
+    const dealii::Tensor<1, 3>* gradients_of(unsigned int k) const { return &gradients[at(k) * nq * nbase]; }
   };
   const Cells& cells() const {
     if (!cells_built_) build_cells();

@@ -78,10 +78,12 @@ bool ElasticityTerm::assemble_fixed(const std::vector<unsigned int>& cells, cons
   Tensor4 A;
   for (const unsigned int k : cells) {
     const types::global_dof_index* indices = c.dofs(k);
+    const double* cell_jxw = c.jxw_of(k);
+    const Tensor<1, 3>* cell_gradients = c.gradients_of(k);
     const Material& material = material_of(k);
     for (int i = 0; i < N; ++i) u_local[i] = u[indices[i]];
     for (unsigned int q = 0; q < nq; ++q) {
-      const Tensor<1, 3>* grad = c.gradients_at(k, q);
+      const Tensor<1, 3>* grad = cell_gradients + q * c.nbase;
       Tensor2& F = F_at[q];
       F = 0;
       for (int i = 0; i < N; ++i)
@@ -97,7 +99,7 @@ bool ElasticityTerm::assemble_fixed(const std::vector<unsigned int>& cells, cons
     if (dilatation) {
       double volume = 0;
       for (unsigned int q = 0; q < nq; ++q) {
-        const double jxw = c.jxw_at(k, q);
+        const double jxw = cell_jxw[q];
         const double j = determinant(F_at[q]);
         if (!(j > 0)) return false;
         volume += j * jxw;
@@ -107,8 +109,8 @@ bool ElasticityTerm::assemble_fixed(const std::vector<unsigned int>& cells, cons
       volume_gradient.fill(0);
     }
     for (unsigned int q = 0; q < nq; ++q) {
-      const Tensor<1, 3>* grad = c.gradients_at(k, q);
-      const double jxw = c.jxw_at(k, q);
+      const Tensor<1, 3>* grad = cell_gradients + q * c.nbase;
+      const double jxw = cell_jxw[q];
       const Tensor2& F = F_at[q];
       if (!material.evaluate(F, P, tangent ? &A : nullptr)) return false;
       if (dilatation) {

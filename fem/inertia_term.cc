@@ -77,12 +77,13 @@ void InertiaTerm::mass_times(const Vector<double>& x, double* out, double gain, 
   if (tangent) target->system->build_cell_scatter();
   for (const unsigned int k : d_.my_cells) {
     const types::global_dof_index* indices = c.dofs(k);
+    const double* cell_jxw = c.jxw_of(k);
     d_.gather(k, x, local.data());
     std::fill(cell_out.begin(), cell_out.end(), 0.0);
     if (tangent) std::fill(cell_matrix.begin(), cell_matrix.end(), 0.0);
     for (unsigned int q = 0; q < nq; ++q) {
       const double* shape = &c.shape_values[q * c.nbase];
-      const double w = density_[k] * c.jxw_at(k, q);
+      const double w = density_[k] * cell_jxw[q];
       double field[3] = {0, 0, 0};
       for (unsigned int j = 0; j < n; ++j) field[c.component[j]] += shape[c.base[j]] * local[j];
       for (unsigned int i = 0; i < n; ++i) {
