@@ -50,7 +50,7 @@ class QuasiStaticSolver {
                     MPI_Comm comm = MPI_COMM_WORLD);
   ~QuasiStaticSolver();
   int ranks() const;
-  // Linear solves by CG with algebraic multigrid (GAMG, rigid-body near-null space) instead of CG
+  // Linear solves by CG with algebraic multigrid (aggregation of nodes, rigid-body near-null space) instead of CG
   // on a stale sparse Cholesky factorisation: for meshes too large to factorise.
   void use_algebraic_multigrid(bool on);
   // Threads assembling the elasticity (1 or 2, the default; elasticity_term.h).

@@ -1,6 +1,7 @@
 #include "fem/tangent_system.h"
 
 #include "fem/background_factoriser.h"
+#include "fem/tangent_system_petsc.h"
 
 #include <dlfcn.h>
 #include <pthread.h>
@@ -56,23 +57,6 @@ void limit_library_threads() {
 double seconds_since(std::chrono::steady_clock::time_point start) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
-
-struct TangentSystem::Petsc {
-  Mat mat = nullptr;
-  KSP ksp = nullptr;
-  PC pc = nullptr;
-  Vec b = nullptr, x = nullptr;
-  bool factored = false;
-  void destroy() {
-    if (ksp) KSPDestroy(&ksp);
-    if (mat) MatDestroy(&mat);
-    if (b) VecDestroy(&b);
-    if (x) VecDestroy(&x);
-    ksp = nullptr, mat = nullptr, b = nullptr, x = nullptr, pc = nullptr;
-    factored = false;
-  }
-  ~Petsc() { destroy(); }
-};
 
 TangentSystem::TangentSystem(MPI_Comm comm) : comm_(comm), petsc_(std::make_unique<Petsc>()) {
   limit_library_threads();
@@ -152,7 +136,18 @@ void TangentSystem::create_solver(const char* type) {
   check(KSPSetType(p.ksp, KSPCG), "choosing CG");
   check(KSPSetNormType(p.ksp, KSP_NORM_UNPRECONDITIONED), "choosing the residual norm");
   check(KSPGetPC(p.ksp, &p.pc), "getting the preconditioner");
-  if (method_ == Method::amg) {
+  char requested[64] = "";
+  PetscBool given = PETSC_FALSE;
+  check(PetscOptionsGetString(nullptr, nullptr, "-pc_type", requested, sizeof requested, &given), "reading options");
+  gamg_ = method_ == Method::amg && given && std::string(requested) == PCGAMG;
+  if (method_ == Method::amg && !gamg_) {
+    // Our aggregation of nodes (fem/aggregation_multigrid.h): its levels are built at each set-up
+    // (factor()). PETSc's GAMG, below, on request: on a block cut into tetrahedra it made 3 nodes an
+    // aggregate and failed its set-up at 334,620 DOFs (docs/benchmarks.md).
+    check(PCSetType(p.pc, PCMG), "choosing algebraic multigrid");
+    aggregation_levels_.clear();
+    solver_type_ = "aggregation";
+  } else if (method_ == Method::amg) {
     check(PCSetType(p.pc, PCGAMG), "choosing algebraic multigrid");
     // Plain (unsmoothed) aggregation: sparser coarse operators, so a set-up and a V-cycle cost about
     // half as much, for 1.7x the CG iterations. Measured on bench_fem's block at 10,080 DOFs: a
@@ -205,31 +200,6 @@ void TangentSystem::create_solver(const char* type) {
   check(KSPSetFromOptions(p.ksp), "reading PETSC_OPTIONS");
 }
 
-std::vector<TangentSystem::Level> TangentSystem::multigrid_levels() const {
-  std::vector<Level> levels;
-  const Petsc& p = *petsc_;
-  PetscInt count = 0;
-  if (method_ != Method::amg || !p.pc || PCMGGetLevels(p.pc, &count) != 0) return levels;
-  for (PetscInt level = count - 1; level >= 0; --level) {  // PCMG numbers the coarsest 0
-    KSP smoother = nullptr;
-    Mat a = nullptr;
-    MatInfo info;
-    PetscInt rows = 0;
-    if (PCMGGetSmoother(p.pc, level, &smoother) != 0 || KSPGetOperators(smoother, &a, nullptr) != 0 ||
-        MatGetSize(a, &rows, nullptr) != 0 || MatGetInfo(a, MAT_GLOBAL_SUM, &info) != 0)
-      return {};
-    levels.push_back({static_cast<std::size_t>(rows), static_cast<std::size_t>(info.nz_used)});
-  }
-  return levels;
-}
-
-double TangentSystem::operator_complexity(const std::vector<Level>& levels) {
-  if (levels.empty() || levels[0].nonzeros == 0) return 0;
-  double nonzeros = 0;
-  for (const Level& level : levels) nonzeros += static_cast<double>(level.nonzeros);
-  return nonzeros / static_cast<double>(levels[0].nonzeros);
-}
-
 int TangentSystem::position(int row, int column) const {
   const int* begin = columns_.data() + row_start_[row];
   const int* end = columns_.data() + row_start_[row + 1];
@@ -273,6 +243,7 @@ void TangentSystem::factor(SolveStats& stats) {
   Petsc& p = *petsc_;
   const auto start = std::chrono::steady_clock::now();
   check(PCSetReusePreconditioner(p.pc, PETSC_FALSE), "refactorising");
+  if (method_ == Method::amg && !gamg_) build_multigrid();  // tangent_system_multigrid.cc
   // CHOLMOD reports a K that is not positive definite as an error: caught quietly, then LDL'.
   PetscPushErrorHandler(PetscReturnErrorHandler, nullptr);
   PetscErrorCode code = KSPSetUp(p.ksp);  // the first time
@@ -312,59 +283,6 @@ void TangentSystem::gather(double* x) const {
   MPI_Allgather(&local, 1, MPI_INT, counts.data(), 1, MPI_INT, comm_);
   MPI_Allgather(&owned_begin_, 1, MPI_INT, displacements.data(), 1, MPI_INT, comm_);
   MPI_Allgatherv(MPI_IN_PLACE, 0, MPI_DATATYPE_NULL, x, counts.data(), displacements.data(), MPI_DOUBLE, comm_);
-}
-
-TangentSystem::SolveStats TangentSystem::solve(const double* b, double* x, double tolerance, bool zero_guess) {
-  if (direct_cholmod_ || method_ == Method::factorisation) return solve_factorised(b, x, tolerance, zero_guess);
-  // Multigrid: PETSc's CG, preconditioned by GAMG.
-  Petsc& p = *petsc_;
-  SolveStats stats;
-  const int n = static_cast<int>(rows());
-  if (zero_guess) std::fill(x, x + n, 0.0);
-  // Each rank hands PETSc its owned block of the whole vectors.
-  check(VecPlaceArray(p.b, b + owned_begin_), "wrapping the right-hand side");
-  check(VecPlaceArray(p.x, x + owned_begin_), "wrapping the solution");
-  struct Unplace {
-    Petsc& p;
-    ~Unplace() { VecResetArray(p.b), VecResetArray(p.x); }
-  } unplace{p};
-  const auto cg = [&](int limit) {
-    const auto start = std::chrono::steady_clock::now();
-    check(KSPSetInitialGuessNonzero(p.ksp, PETSC_TRUE), "setting the initial guess");
-    check(KSPSetTolerances(p.ksp, tolerance, 0.0, 1e30, limit), "setting tolerances");
-    check(KSPSolve(p.ksp, p.b, p.x), "conjugate gradients");
-    KSPConvergedReason reason;
-    PetscInt iterations;
-    check(KSPGetConvergedReason(p.ksp, &reason), "checking convergence");
-    check(KSPGetIterationNumber(p.ksp, &iterations), "counting iterations");
-    stats.iterations += static_cast<int>(iterations);
-    stats.solve_s += since(start);
-    if (reason > 0) {
-      if (baseline_iterations_ < 0) baseline_iterations_ = static_cast<int>(iterations);
-      // Multigrid drifts from its own first count (a factorisation from one iteration: solve_factorised).
-      if (iterations > std::max(refactor_after_iterations, 3 * baseline_iterations_ / 2)) refactor_ = true;
-    }
-    return reason > 0;
-  };
-  // No hierarchy yet, one due, or CG on the old one failed (it drifted too far from K, or K lost
-  // definiteness): set up again, then solve by CG on the fresh multigrid.
-  if (!p.factored || refactor_ || !cg(1000)) {
-    factor(stats);
-    if (!cg(1000)) {
-      // Multigrid cannot carry every tangent: nearly incompressible tissue (nu -> 0.5), where the
-      // volumetric stiffness dwarfs the shear, left CG at its limit on every load step (the random
-      // scenes found it: 32 failed frames of 42). A sparse factorisation (MUMPS) can, at its cost:
-      // this system factorises from here on.
-      method_ = Method::factorisation;
-      create_solver(MATSOLVERMUMPS);
-      factor(stats);
-      const auto start = std::chrono::steady_clock::now();
-      check(PCApply(p.pc, p.b, p.x), "solving with the factorisation");
-      stats.solve_s += since(start);
-    }
-  }
-  gather(x);
-  return stats;
 }
 
 // CHOLMOD's factor, or its single-precision copy where one is kept and double is not asked for.

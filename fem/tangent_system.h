@@ -29,9 +29,10 @@
 // outside them).
 //
 // Or, selectable (and chosen by size in the scene), CG preconditioned by algebraic multigrid
-// (PETSc's GAMG, plain aggregation of nodes matched along their heaviest couplings, told the
-// rigid-body modes as its near-null space), set up again when CG needs half as many iterations
-// again as it did after the last set-up.
+// (smoothed aggregation of nodes, each with its neighbourhood, carrying the rigid-body modes as
+// the near-null space: fem/aggregation_multigrid.h, run by PETSc's PCMG; PETSc's own GAMG when
+// PETSC_OPTIONS says -pc_type gamg), set up again when CG needs half as many iterations again as it
+// did after the last set-up.
 //
 // In parallel the matrix is PETSc's MPIAIJ over a communicator, each rank owning a contiguous block
 // of rows, with MUMPS as the factorisation (CHOLMOD is serial). Every rank keeps the whole CSR
@@ -174,10 +175,16 @@ class TangentSystem {
   // positive definite, until a K that is is factorised); and how often they left it so far.
   bool cholmod() const { return direct_cholmod_; }
   int cholmod_departures() const { return cholmod_departures_; }
+  // Multigrid solves that met a K that is not positive definite and were solved by GMRES.
+  int indefinite_solves() const { return indefinite_solves_; }
   // AMG's hierarchy as set up last, the fine level first: rows and stored entries (nonzeros) of each
   // level's operator. Empty for the direct path and before the first AMG solve. Collective under MPI.
+  // Under our aggregation, also the aggregates of each level's nodes and their mean size (0 on the
+  // coarsest and under GAMG).
   struct Level {
     std::size_t rows = 0, nonzeros = 0;
+    std::size_t aggregates = 0;
+    double nodes_per_aggregate = 0;
   };
   std::vector<Level> multigrid_levels() const;
   // All levels' nonzeros over the fine level's (0 without levels).
@@ -211,11 +218,15 @@ class TangentSystem {
   std::vector<double> near_null_space_;
   int near_null_vectors_ = 0;
   int node_block_ = 1;
+  bool gamg_ = false;                      // PETSc's GAMG instead of our aggregation
+  int indefinite_solves_ = 0;              // multigrid solves that needed GMRES (K not positive definite)
+  std::vector<Level> aggregation_levels_;  // our aggregation's, as set up last
   std::vector<int> row_start_, columns_, diagonal_;
   std::vector<double> values_;
   bool refactor_ = true;
   int factorisations_ = 0;
   struct Petsc;
+  void build_multigrid();  // our aggregation's levels into the PC (factor())
   std::unique_ptr<Petsc> petsc_;
   // One rank, factorisation: CHOLMOD directly, a worker for background factorisations. The solves
   // leave it for MUMPS while K is not positive definite (leave_cholmod), and come back.
