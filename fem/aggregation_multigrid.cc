@@ -21,43 +21,62 @@ struct NodeGraph {
   std::vector<double> weight;
 };
 
+// The rows' couplings among this rank's own rows: the diagonal block of an MPIAIJ matrix, or the
+// whole of a SEQAIJ one, read as CSR arrays (no copy).
+struct LocalRows {
+  Mat block = nullptr;
+  PetscInt rows = 0;
+  const PetscInt *start = nullptr, *columns = nullptr;
+  const PetscScalar* values = nullptr;
+  explicit LocalRows(Mat a) {
+    PetscBool mpi = PETSC_FALSE;
+    check(PetscObjectTypeCompare(reinterpret_cast<PetscObject>(a), MATMPIAIJ, &mpi), "reading the matrix type");
+    block = a;
+    if (mpi) check(MatMPIAIJGetSeqAIJ(a, &block, nullptr, nullptr), "reading the rank's rows");
+    PetscBool done = PETSC_FALSE;
+    check(MatGetRowIJ(block, 0, PETSC_FALSE, PETSC_FALSE, &rows, &start, &columns, &done), "reading the rank's rows");
+    if (!done) throw std::runtime_error("multigrid set-up: the matrix gives no row arrays");
+    check(MatSeqAIJGetArrayRead(block, &values), "reading the rank's rows");
+  }
+  ~LocalRows() {
+    PetscBool done = PETSC_FALSE;
+    MatSeqAIJRestoreArrayRead(block, &values);
+    MatRestoreRowIJ(block, 0, PETSC_FALSE, PETSC_FALSE, &rows, &start, &columns, &done);
+  }
+  LocalRows(const LocalRows&) = delete;
+  LocalRows& operator=(const LocalRows&) = delete;
+};
+
 NodeGraph node_graph(Mat a, int block, double strength) {
-  PetscInt begin = 0, end = 0;
-  check(MatGetOwnershipRange(a, &begin, &end), "reading the rows");
-  const int local = static_cast<int>(end - begin);
-  if (local % block != 0) throw std::runtime_error("multigrid set-up: a rank's rows are not whole nodes");
-  const int nodes = local / block;
-  // Squared Frobenius norms of the node-by-node blocks, one node row at a time.
-  std::vector<double> sum(nodes, 0.0);
-  std::vector<int> seen(nodes, -1), touched;
-  std::vector<std::vector<std::pair<int, double>>> blocks(nodes);
-  std::vector<double> diagonal(nodes, 0.0);
+  const LocalRows local(a);
+  if (local.rows % block != 0) throw std::runtime_error("multigrid set-up: a rank's rows are not whole nodes");
+  const int nodes = static_cast<int>(local.rows) / block;
+  // Frobenius norms of the node-by-node blocks, one node row at a time, kept as a CSR of nodes.
+  std::vector<double> sum(nodes, 0.0), diagonal(nodes, 0.0);
+  std::vector<int> seen(nodes, -1), touched, start{0}, neighbour;
+  std::vector<double> norm;
   for (int i = 0; i < nodes; ++i) {
     touched.clear();
     for (int d = 0; d < block; ++d) {
-      PetscInt count = 0;
-      const PetscInt* cols = nullptr;
-      const PetscScalar* values = nullptr;
-      const PetscInt row = begin + i * block + d;
-      check(MatGetRow(a, row, &count, &cols, &values), "reading a row");
-      for (PetscInt e = 0; e < count; ++e) {
-        if (cols[e] < begin || cols[e] >= end) continue;
-        const int j = static_cast<int>(cols[e] - begin) / block;
+      const PetscInt row = i * block + d;
+      for (PetscInt e = local.start[row]; e < local.start[row + 1]; ++e) {
+        const int j = static_cast<int>(local.columns[e]) / block;
         if (seen[j] != i) seen[j] = i, sum[j] = 0, touched.push_back(j);
-        sum[j] += values[e] * values[e];
+        sum[j] += local.values[e] * local.values[e];
       }
-      check(MatRestoreRow(a, row, &count, &cols, &values), "reading a row");
     }
+    std::sort(touched.begin(), touched.end());
     for (const int j : touched) {
       if (j == i) diagonal[i] = std::sqrt(sum[j]);
-      else if (sum[j] > 0) blocks[i].push_back({j, std::sqrt(sum[j])});
+      else if (sum[j] > 0) neighbour.push_back(j), norm.push_back(std::sqrt(sum[j]));
     }
+    start.push_back(static_cast<int>(neighbour.size()));
   }
   NodeGraph g;
   for (int i = 0; i < nodes; ++i) {
-    std::sort(blocks[i].begin(), blocks[i].end());
-    for (const auto& [j, w] : blocks[i])
-      if (w > strength * std::sqrt(diagonal[i] * diagonal[j])) g.columns.push_back(j), g.weight.push_back(w);
+    for (int e = start[i]; e < start[i + 1]; ++e)
+      if (norm[e] > strength * std::sqrt(diagonal[i] * diagonal[neighbour[e]]))
+        g.columns.push_back(neighbour[e]), g.weight.push_back(norm[e]);
     g.row_start.push_back(static_cast<int>(g.columns.size()));
   }
   return g;
