@@ -117,6 +117,7 @@ Coarsened tentative(Mat a, int block, const std::vector<int>& aggregate, int cou
   check(MatMPIAIJSetPreallocation(c.p, vectors, nullptr, 0, nullptr), "allocating a prolongator");
   c.null_space.assign(static_cast<std::size_t>(c.local_coarse) * vectors, 0.0);
   std::vector<PetscInt> cols(vectors);
+  std::vector<PetscScalar> values(vectors);
   for (int g = 0; g < count; ++g) {
     const int rows = static_cast<int>(members[g].size()) * block;
     Eigen::MatrixXd b(rows, vectors);
@@ -133,7 +134,6 @@ Coarsened tentative(Mat a, int block, const std::vector<int>& aggregate, int cou
     for (int m = 0; m < static_cast<int>(members[g].size()); ++m)
       for (int d = 0; d < block; ++d) {
         const PetscInt row = begin + members[g][m] * block + d;
-        std::vector<PetscScalar> values(vectors);
         for (int v = 0; v < vectors; ++v) values[v] = q(m * block + d, v);
         check(MatSetValues(c.p, 1, &row, vectors, cols.data(), values.data(), INSERT_VALUES), "filling a prolongator");
       }
@@ -233,8 +233,9 @@ std::vector<int> aggregate_nodes(const std::vector<int>& row_start, const std::v
     double strongest = -1;
     for (int e = row_start[i]; e < row_start[i + 1]; ++e)
       if (first[columns[e]] >= 0 && weight[e] > strongest) strongest = weight[e], best = first[columns[e]];
-    // Every free node has a neighbour in phase 1's aggregates (else it would have been a root);
-    // a node whose neighbours are all left out cannot be, having edges.
+    // Every free node has a neighbour in phase 1's aggregates, else it would have been a root (its
+    // neighbours are never left out: a left-out node has no edges, and the graph is symmetric).
+    // Its own aggregate otherwise, which the size check below merges or leaves out.
     aggregate[i] = best >= 0 ? best : next++;
   }
   // Aggregates too small for the near-null space join their most strongly coupled neighbour.
@@ -283,7 +284,17 @@ std::vector<AggregationLevel> build_aggregation_multigrid(PC pc, Mat a, const do
     for (int i = 0; i < local; ++i) constants[std::size_t(i % block) * local + i] = 1.0;
     null_space = constants.data();
   }
-  std::vector<Mat> operators{a}, prolongators;
+  // The coarse operators and prolongators made here, released however this returns (PCMG takes
+  // its own references to those it is given).
+  struct Made {
+    std::vector<Mat> operators, prolongators;
+    ~Made() {
+      for (Mat& m : operators) MatDestroy(&m);
+      for (Mat& m : prolongators) MatDestroy(&m);
+    }
+  } made;
+  std::vector<Mat>& prolongators = made.prolongators;
+  std::vector<Mat> operators{a};
   std::vector<AggregationLevel> levels{describe(a)};
   std::vector<double> coarse_null;
   const double* b = null_space;
@@ -303,11 +314,13 @@ std::vector<AggregationLevel> build_aggregation_multigrid(PC pc, Mat a, const do
     }
     levels.back().aggregates = all[0];
     levels.back().nodes_per_aggregate = static_cast<double>(all[1]) / static_cast<double>(all[0]);
-    for (int k = 0; k < settings.smoothings; ++k) smooth(fine, c.p);
-    Mat coarse = nullptr;
-    check(MatPtAP(fine, c.p, MAT_INITIAL_MATRIX, PETSC_DEFAULT, &coarse), "forming a coarse level");
-    operators.push_back(coarse);
     prolongators.push_back(c.p);
+    Mat& p = prolongators.back();
+    for (int k = 0; k < settings.smoothings; ++k) smooth(fine, p);
+    Mat coarse = nullptr;
+    check(MatPtAP(fine, p, MAT_INITIAL_MATRIX, PETSC_DEFAULT, &coarse), "forming a coarse level");
+    made.operators.push_back(coarse);
+    operators.push_back(coarse);
     levels.push_back(describe(coarse));
     coarse_null = std::move(c.null_space);
     b = coarse_null.data();
@@ -346,9 +359,6 @@ std::vector<AggregationLevel> build_aggregation_multigrid(PC pc, Mat a, const do
       check(KSPSetFromOptions(coarse), "reading PETSC_OPTIONS");
     }
   }
-  // PCMG holds its own references now.
-  for (Mat& p : prolongators) MatDestroy(&p);
-  for (std::size_t k = 1; k < operators.size(); ++k) MatDestroy(&operators[k]);
   return levels;
 }
 
