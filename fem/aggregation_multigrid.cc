@@ -330,7 +330,14 @@ std::vector<AggregationLevel> build_aggregation_multigrid(PC pc, Mat a, const do
   const int count = static_cast<int>(operators.size());
   check(PCSetType(pc, PCMG), "choosing multigrid");
   check(PCMGSetLevels(pc, count, nullptr), "setting the levels");
-  check(PCMGSetType(pc, PC_MG_MULTIPLICATIVE), "choosing V-cycles");
+  check(PCMGSetType(pc, PC_MG_MULTIPLICATIVE), "choosing multiplicative cycles");
+  // W-cycles: a V-cycle of plain aggregation loses with each level (CG's iterations a column 52 ->
+  // 99 from 17,442 to 421,668 DOFs, 1.91x); a W-cycle visits the coarse levels twice and held them
+  // to 42 -> 62 (1.46x), a column 11-13 % cheaper from 191,880 DOFs up, 29 % dearer at 17,442
+  // (docs/benchmarks.md). PETSC_OPTIONS=-pc_mg_cycle_type v overrides.
+  PetscBool cycle_given = PETSC_FALSE;
+  check(PetscOptionsHasName(nullptr, nullptr, "-pc_mg_cycle_type", &cycle_given), "reading options");
+  if (!cycle_given) check(PCMGSetCycleType(pc, PC_MG_CYCLE_W), "choosing W-cycles");
   check(PCMGSetGalerkin(pc, PC_MG_GALERKIN_NONE), "giving the coarse operators");
   for (int k = 0; k < count; ++k) {
     const int level = count - 1 - k;  // PCMG numbers the coarsest 0

@@ -35,7 +35,7 @@ struct AggregationSettings {
   int smoothings = 0;        // prolongator smoothings: 0, plain aggregation (below)
   int coarse_rows = 1000;    // stop coarsening at or below this many rows
   int max_levels = 10;
-  int smoother_steps = 2;    // Chebyshev/Jacobi steps before and after the coarse correction
+  int smoother_steps = 2;    // Chebyshev/Jacobi steps before and after the coarse correction (W-cycles)
 };
 
 struct AggregationLevel {
