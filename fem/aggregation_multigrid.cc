@@ -2,6 +2,8 @@
 
 #include <Eigen/Dense>
 
+#include "fem/petsc_check.h"
+
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
@@ -10,10 +12,6 @@
 
 namespace fetouch::fem {
 namespace {
-
-void check(PetscErrorCode code, const char* what) {
-  if (code != 0) throw std::runtime_error(std::string("multigrid set-up failed ") + what + " (PETSc error " + std::to_string(code) + ")");
-}
 
 // A level's node graph from its local rows (columns of other ranks' rows are left out).
 struct NodeGraph {
@@ -30,13 +28,13 @@ struct LocalRows {
   const PetscScalar* values = nullptr;
   explicit LocalRows(Mat a) {
     PetscBool mpi = PETSC_FALSE;
-    check(PetscObjectTypeCompare(reinterpret_cast<PetscObject>(a), MATMPIAIJ, &mpi), "reading the matrix type");
+    petsc_check(PetscObjectTypeCompare(reinterpret_cast<PetscObject>(a), MATMPIAIJ, &mpi), "reading the matrix type");
     block = a;
-    if (mpi) check(MatMPIAIJGetSeqAIJ(a, &block, nullptr, nullptr), "reading the rank's rows");
+    if (mpi) petsc_check(MatMPIAIJGetSeqAIJ(a, &block, nullptr, nullptr), "reading the rank's rows");
     PetscBool done = PETSC_FALSE;
-    check(MatGetRowIJ(block, 0, PETSC_FALSE, PETSC_FALSE, &rows, &start, &columns, &done), "reading the rank's rows");
+    petsc_check(MatGetRowIJ(block, 0, PETSC_FALSE, PETSC_FALSE, &rows, &start, &columns, &done), "reading the rank's rows");
     if (!done) throw std::runtime_error("multigrid set-up: the matrix gives no row arrays");
-    check(MatSeqAIJGetArrayRead(block, &values), "reading the rank's rows");
+    petsc_check(MatSeqAIJGetArrayRead(block, &values), "reading the rank's rows");
   }
   ~LocalRows() {
     PetscBool done = PETSC_FALSE;
@@ -94,7 +92,7 @@ Coarsened tentative(Mat a, int block, const std::vector<int>& aggregate, int cou
                     int vectors) {
   MPI_Comm comm = PetscObjectComm(reinterpret_cast<PetscObject>(a));
   PetscInt begin = 0, end = 0;
-  check(MatGetOwnershipRange(a, &begin, &end), "reading the rows");
+  petsc_check(MatGetOwnershipRange(a, &begin, &end), "reading the rows");
   const int local = static_cast<int>(end - begin);
   Coarsened c;
   c.local_coarse = count * vectors;
@@ -104,69 +102,84 @@ Coarsened tentative(Mat a, int block, const std::vector<int>& aggregate, int cou
   MPI_Comm_rank(comm, &rank);
   if (rank == 0) offset = 0;
 
-  std::vector<std::vector<int>> members(count);
-  for (int i = 0; i < static_cast<int>(aggregate.size()); ++i)
-    if (aggregate[i] >= 0) members[aggregate[i]].push_back(i), ++c.aggregated_nodes;
+  // Each aggregate's nodes, in node order: members[first[g], first[g + 1]) (a counting sort).
+  std::vector<int> first(count + 1, 0), members;
+  for (const int g : aggregate)
+    if (g >= 0) ++first[g + 1];
+  for (int g = 0; g < count; ++g) first[g + 1] += first[g];
+  members.resize(first[count]);
+  {
+    std::vector<int> next(first.begin(), first.end() - 1);
+    for (int i = 0; i < static_cast<int>(aggregate.size()); ++i)
+      if (aggregate[i] >= 0) members[next[aggregate[i]]++] = i;
+  }
+  c.aggregated_nodes = members.size();
   c.aggregates = static_cast<std::size_t>(count);
 
-  check(MatCreate(comm, &c.p), "creating a prolongator");
-  check(MatSetSizes(c.p, local, c.local_coarse, PETSC_DETERMINE, PETSC_DETERMINE), "sizing a prolongator");
-  check(MatSetBlockSizes(c.p, block, vectors), "sizing a prolongator");
-  check(MatSetType(c.p, MATAIJ), "creating a prolongator");
-  check(MatSeqAIJSetPreallocation(c.p, vectors, nullptr), "allocating a prolongator");
-  check(MatMPIAIJSetPreallocation(c.p, vectors, nullptr, 0, nullptr), "allocating a prolongator");
-  c.null_space.assign(static_cast<std::size_t>(c.local_coarse) * vectors, 0.0);
-  std::vector<PetscInt> cols(vectors);
-  std::vector<PetscScalar> values(vectors);
-  for (int g = 0; g < count; ++g) {
-    const int rows = static_cast<int>(members[g].size()) * block;
-    Eigen::MatrixXd b(rows, vectors);
-    for (int m = 0; m < static_cast<int>(members[g].size()); ++m)
-      for (int d = 0; d < block; ++d)
-        for (int v = 0; v < vectors; ++v)
-          b(m * block + d, v) = null_space[std::size_t(v) * local + members[g][m] * block + d];
-    const Eigen::HouseholderQR<Eigen::MatrixXd> qr(b);
-    Eigen::MatrixXd q = qr.householderQ() * Eigen::MatrixXd::Identity(rows, vectors);
-    Eigen::MatrixXd r = qr.matrixQR().topRows(vectors).triangularView<Eigen::Upper>();
-    for (int v = 0; v < vectors; ++v)
-      if (r(v, v) < 0) q.col(v) *= -1, r.row(v) *= -1;
-    for (int v = 0; v < vectors; ++v) cols[v] = static_cast<PetscInt>(offset + g * vectors + v);
-    for (int m = 0; m < static_cast<int>(members[g].size()); ++m)
-      for (int d = 0; d < block; ++d) {
-        const PetscInt row = begin + members[g][m] * block + d;
-        for (int v = 0; v < vectors; ++v) values[v] = q(m * block + d, v);
-        check(MatSetValues(c.p, 1, &row, vectors, cols.data(), values.data(), INSERT_VALUES), "filling a prolongator");
-      }
-    for (int v = 0; v < vectors; ++v)
-      for (int w = 0; w < vectors; ++w) c.null_space[std::size_t(v) * c.local_coarse + g * vectors + w] = r(w, v);
+  petsc_check(MatCreate(comm, &c.p), "creating a prolongator");
+  try {  // the prolongator released if filling it fails
+    petsc_check(MatSetSizes(c.p, local, c.local_coarse, PETSC_DETERMINE, PETSC_DETERMINE), "sizing a prolongator");
+    petsc_check(MatSetBlockSizes(c.p, block, vectors), "sizing a prolongator");
+    petsc_check(MatSetType(c.p, MATAIJ), "creating a prolongator");
+    petsc_check(MatSeqAIJSetPreallocation(c.p, vectors, nullptr), "allocating a prolongator");
+    petsc_check(MatMPIAIJSetPreallocation(c.p, vectors, nullptr, 0, nullptr), "allocating a prolongator");
+    c.null_space.assign(static_cast<std::size_t>(c.local_coarse) * vectors, 0.0);
+    std::vector<PetscInt> cols(vectors);
+    std::vector<PetscScalar> values(vectors);
+    for (int g = 0; g < count; ++g) {
+      const int* nodes = members.data() + first[g];
+      const int size = first[g + 1] - first[g];
+      const int rows = size * block;
+      Eigen::MatrixXd b(rows, vectors);
+      for (int m = 0; m < size; ++m)
+        for (int d = 0; d < block; ++d)
+          for (int v = 0; v < vectors; ++v) b(m * block + d, v) = null_space[std::size_t(v) * local + nodes[m] * block + d];
+      const Eigen::HouseholderQR<Eigen::MatrixXd> qr(b);
+      Eigen::MatrixXd q = qr.householderQ() * Eigen::MatrixXd::Identity(rows, vectors);
+      Eigen::MatrixXd r = qr.matrixQR().topRows(vectors).triangularView<Eigen::Upper>();
+      for (int v = 0; v < vectors; ++v)
+        if (r(v, v) < 0) q.col(v) *= -1, r.row(v) *= -1;
+      for (int v = 0; v < vectors; ++v) cols[v] = static_cast<PetscInt>(offset + g * vectors + v);
+      for (int m = 0; m < size; ++m)
+        for (int d = 0; d < block; ++d) {
+          const PetscInt row = begin + nodes[m] * block + d;
+          for (int v = 0; v < vectors; ++v) values[v] = q(m * block + d, v);
+          petsc_check(MatSetValues(c.p, 1, &row, vectors, cols.data(), values.data(), INSERT_VALUES), "filling a prolongator");
+        }
+      for (int v = 0; v < vectors; ++v)
+        for (int w = 0; w < vectors; ++w) c.null_space[std::size_t(v) * c.local_coarse + g * vectors + w] = r(w, v);
+    }
+    petsc_check(MatAssemblyBegin(c.p, MAT_FINAL_ASSEMBLY), "assembling a prolongator");
+    petsc_check(MatAssemblyEnd(c.p, MAT_FINAL_ASSEMBLY), "assembling a prolongator");
+  } catch (...) {
+    MatDestroy(&c.p);
+    throw;
   }
-  check(MatAssemblyBegin(c.p, MAT_FINAL_ASSEMBLY), "assembling a prolongator");
-  check(MatAssemblyEnd(c.p, MAT_FINAL_ASSEMBLY), "assembling a prolongator");
   return c;
 }
 
 // rho(D^-1 A) by power iteration, from a start that depends on global row numbers only.
 double jacobi_spectral_radius(Mat a, Vec inverse_diagonal) {
   Vec x = nullptr, y = nullptr;
-  check(MatCreateVecs(a, &x, &y), "creating vectors");
+  petsc_check(MatCreateVecs(a, &x, &y), "creating vectors");
   PetscInt begin = 0, end = 0;
-  check(VecGetOwnershipRange(x, &begin, &end), "reading the rows");
+  petsc_check(VecGetOwnershipRange(x, &begin, &end), "reading the rows");
   double* values = nullptr;
-  check(VecGetArray(x, &values), "filling a vector");
+  petsc_check(VecGetArray(x, &values), "filling a vector");
   for (PetscInt i = begin; i < end; ++i) {
     const std::uint64_t h = (static_cast<std::uint64_t>(i) + 1) * 0x9E3779B97F4A7C15ull;
     values[i - begin] = 0.5 + static_cast<double>((h >> 11) & 0xFFFFF) / double(0xFFFFF);
   }
-  check(VecRestoreArray(x, &values), "filling a vector");
+  petsc_check(VecRestoreArray(x, &values), "filling a vector");
   double rho = 0, norm = 0;
-  check(VecNorm(x, NORM_2, &norm), "a norm");
-  check(VecScale(x, 1.0 / norm), "scaling");
+  petsc_check(VecNorm(x, NORM_2, &norm), "a norm");
+  petsc_check(VecScale(x, 1.0 / norm), "scaling");
   for (int k = 0; k < 20; ++k) {
-    check(MatMult(a, x, y), "a product");
-    check(VecPointwiseMult(y, y, inverse_diagonal), "scaling");
-    check(VecNorm(y, NORM_2, &rho), "a norm");
+    petsc_check(MatMult(a, x, y), "a product");
+    petsc_check(VecPointwiseMult(y, y, inverse_diagonal), "scaling");
+    petsc_check(VecNorm(y, NORM_2, &rho), "a norm");
     if (!(rho > 0)) break;
-    check(VecScale(y, 1.0 / rho), "scaling");
+    petsc_check(VecScale(y, 1.0 / rho), "scaling");
     std::swap(x, y);
   }
   VecDestroy(&x);
@@ -177,26 +190,26 @@ double jacobi_spectral_radius(Mat a, Vec inverse_diagonal) {
 // P = (I - w D^-1 A) P0, w = 4 / (3 rho). Replaces p.
 void smooth(Mat a, Mat& p) {
   Vec d = nullptr;
-  check(MatCreateVecs(a, nullptr, &d), "creating a vector");
-  check(MatGetDiagonal(a, d), "reading the diagonal");
-  check(VecReciprocal(d), "inverting the diagonal");
+  petsc_check(MatCreateVecs(a, nullptr, &d), "creating a vector");
+  petsc_check(MatGetDiagonal(a, d), "reading the diagonal");
+  petsc_check(VecReciprocal(d), "inverting the diagonal");
   const double rho = jacobi_spectral_radius(a, d);
   const double w = rho > 0 ? 4.0 / (3.0 * 1.05 * rho) : 0.0;
   Mat ap = nullptr;
-  check(MatMatMult(a, p, MAT_INITIAL_MATRIX, PETSC_DEFAULT, &ap), "smoothing a prolongator");
-  check(MatDiagonalScale(ap, d, nullptr), "smoothing a prolongator");
-  check(MatAYPX(ap, -w, p, SUBSET_NONZERO_PATTERN), "smoothing a prolongator");
+  petsc_check(MatMatMult(a, p, MAT_INITIAL_MATRIX, PETSC_DEFAULT, &ap), "smoothing a prolongator");
+  petsc_check(MatDiagonalScale(ap, d, nullptr), "smoothing a prolongator");
+  petsc_check(MatAYPX(ap, -w, p, SUBSET_NONZERO_PATTERN), "smoothing a prolongator");
   VecDestroy(&d);
   MatDestroy(&p);
   p = ap;
 }
 
-AggregationLevel describe(Mat a) {
+MultigridLevel describe(Mat a) {
   PetscInt rows = 0;
   MatInfo info;
-  check(MatGetSize(a, &rows, nullptr), "reading a level");
-  check(MatGetInfo(a, MAT_GLOBAL_SUM, &info), "reading a level");
-  AggregationLevel level;
+  petsc_check(MatGetSize(a, &rows, nullptr), "reading a level");
+  petsc_check(MatGetInfo(a, MAT_GLOBAL_SUM, &info), "reading a level");
+  MultigridLevel level;
   level.rows = static_cast<std::size_t>(rows);
   level.nonzeros = static_cast<std::size_t>(info.nz_used);
   return level;
@@ -268,13 +281,13 @@ std::vector<int> aggregate_nodes(const std::vector<int>& row_start, const std::v
   return aggregate;
 }
 
-std::vector<AggregationLevel> build_aggregation_multigrid(PC pc, Mat a, const double* null_space, int vectors,
-                                                          const AggregationSettings& settings) {
+std::vector<MultigridLevel> build_aggregation_multigrid(PC pc, Mat a, const double* null_space, int vectors,
+                                                        const AggregationSettings& settings) {
   MPI_Comm comm = PetscObjectComm(reinterpret_cast<PetscObject>(a));
   int ranks = 1;
   MPI_Comm_size(comm, &ranks);
   PetscInt begin = 0, end = 0;
-  check(MatGetOwnershipRange(a, &begin, &end), "reading the rows");
+  petsc_check(MatGetOwnershipRange(a, &begin, &end), "reading the rows");
   int block = settings.node_block;
   std::vector<double> constants;
   if (vectors == 0) {  // a node's components, each constant
@@ -295,7 +308,7 @@ std::vector<AggregationLevel> build_aggregation_multigrid(PC pc, Mat a, const do
   } made;
   std::vector<Mat>& prolongators = made.prolongators;
   std::vector<Mat> operators{a};
-  std::vector<AggregationLevel> levels{describe(a)};
+  std::vector<MultigridLevel> levels{describe(a)};
   std::vector<double> coarse_null;
   const double* b = null_space;
   while (static_cast<int>(levels.size()) < settings.max_levels &&
@@ -318,7 +331,7 @@ std::vector<AggregationLevel> build_aggregation_multigrid(PC pc, Mat a, const do
     Mat& p = prolongators.back();
     for (int k = 0; k < settings.smoothings; ++k) smooth(fine, p);
     Mat coarse = nullptr;
-    check(MatPtAP(fine, p, MAT_INITIAL_MATRIX, PETSC_DEFAULT, &coarse), "forming a coarse level");
+    petsc_check(MatPtAP(fine, p, MAT_INITIAL_MATRIX, PETSC_DEFAULT, &coarse), "forming a coarse level");
     made.operators.push_back(coarse);
     operators.push_back(coarse);
     levels.push_back(describe(coarse));
@@ -328,42 +341,42 @@ std::vector<AggregationLevel> build_aggregation_multigrid(PC pc, Mat a, const do
   }
 
   const int count = static_cast<int>(operators.size());
-  check(PCSetType(pc, PCMG), "choosing multigrid");
-  check(PCMGSetLevels(pc, count, nullptr), "setting the levels");
-  check(PCMGSetType(pc, PC_MG_MULTIPLICATIVE), "choosing multiplicative cycles");
+  petsc_check(PCSetType(pc, PCMG), "choosing multigrid");
+  petsc_check(PCMGSetLevels(pc, count, nullptr), "setting the levels");
+  petsc_check(PCMGSetType(pc, PC_MG_MULTIPLICATIVE), "choosing multiplicative cycles");
   // W-cycles: a V-cycle of plain aggregation loses with each level (CG's iterations a column 52 ->
   // 99 from 17,442 to 421,668 DOFs, 1.91x); a W-cycle visits the coarse levels twice and held them
   // to 42 -> 62 (1.46x), a column 11-13 % cheaper from 191,880 DOFs up, 29 % dearer at 17,442
   // (docs/benchmarks.md). PETSC_OPTIONS=-pc_mg_cycle_type v overrides.
   PetscBool cycle_given = PETSC_FALSE;
-  check(PetscOptionsHasName(nullptr, nullptr, "-pc_mg_cycle_type", &cycle_given), "reading options");
-  if (!cycle_given) check(PCMGSetCycleType(pc, PC_MG_CYCLE_W), "choosing W-cycles");
-  check(PCMGSetGalerkin(pc, PC_MG_GALERKIN_NONE), "giving the coarse operators");
+  petsc_check(PetscOptionsHasName(nullptr, nullptr, "-pc_mg_cycle_type", &cycle_given), "reading options");
+  if (!cycle_given) petsc_check(PCMGSetCycleType(pc, PC_MG_CYCLE_W), "choosing W-cycles");
+  petsc_check(PCMGSetGalerkin(pc, PC_MG_GALERKIN_NONE), "giving the coarse operators");
   for (int k = 0; k < count; ++k) {
     const int level = count - 1 - k;  // PCMG numbers the coarsest 0
     if (level > 0) {
       // Restriction P' set too: PCMG keeps the one it took from an earlier set-up's P otherwise.
-      check(PCMGSetInterpolation(pc, level, prolongators[k]), "setting a prolongator");
-      check(PCMGSetRestriction(pc, level, prolongators[k]), "setting a restriction");
+      petsc_check(PCMGSetInterpolation(pc, level, prolongators[k]), "setting a prolongator");
+      petsc_check(PCMGSetRestriction(pc, level, prolongators[k]), "setting a restriction");
       KSP smoother = nullptr;
       PC jacobi = nullptr;
-      check(PCMGGetSmoother(pc, level, &smoother), "getting a smoother");
-      check(KSPSetOperators(smoother, operators[k], operators[k]), "setting a level");
-      check(KSPSetType(smoother, KSPCHEBYSHEV), "choosing Chebyshev");
-      check(KSPChebyshevEstEigSet(smoother, 0, 0.1, 0, 1.1), "estimating eigenvalues");
-      check(KSPSetTolerances(smoother, PETSC_DEFAULT, PETSC_DEFAULT, PETSC_DEFAULT, settings.smoother_steps), "smoothing");
-      check(KSPGetPC(smoother, &jacobi), "getting a smoother");
-      check(PCSetType(jacobi, PCJACOBI), "choosing Jacobi");
-      check(KSPSetFromOptions(smoother), "reading PETSC_OPTIONS");
+      petsc_check(PCMGGetSmoother(pc, level, &smoother), "getting a smoother");
+      petsc_check(KSPSetOperators(smoother, operators[k], operators[k]), "setting a level");
+      petsc_check(KSPSetType(smoother, KSPCHEBYSHEV), "choosing Chebyshev");
+      petsc_check(KSPChebyshevEstEigSet(smoother, 0, 0.1, 0, 1.1), "estimating eigenvalues");
+      petsc_check(KSPSetTolerances(smoother, PETSC_DEFAULT, PETSC_DEFAULT, PETSC_DEFAULT, settings.smoother_steps), "smoothing");
+      petsc_check(KSPGetPC(smoother, &jacobi), "getting a smoother");
+      petsc_check(PCSetType(jacobi, PCJACOBI), "choosing Jacobi");
+      petsc_check(KSPSetFromOptions(smoother), "reading PETSC_OPTIONS");
     } else {
       KSP coarse = nullptr;
       PC lu = nullptr;
-      check(PCMGGetCoarseSolve(pc, &coarse), "getting the coarse solve");
-      check(KSPSetOperators(coarse, operators[k], operators[k]), "setting the coarse level");
-      check(KSPSetType(coarse, KSPPREONLY), "choosing the coarse solve");
-      check(KSPGetPC(coarse, &lu), "getting the coarse solve");
-      check(PCSetType(lu, ranks == 1 ? PCLU : PCREDUNDANT), "choosing the coarse factorisation");
-      check(KSPSetFromOptions(coarse), "reading PETSC_OPTIONS");
+      petsc_check(PCMGGetCoarseSolve(pc, &coarse), "getting the coarse solve");
+      petsc_check(KSPSetOperators(coarse, operators[k], operators[k]), "setting the coarse level");
+      petsc_check(KSPSetType(coarse, KSPPREONLY), "choosing the coarse solve");
+      petsc_check(KSPGetPC(coarse, &lu), "getting the coarse solve");
+      petsc_check(PCSetType(lu, ranks == 1 ? PCLU : PCREDUNDANT), "choosing the coarse factorisation");
+      petsc_check(KSPSetFromOptions(coarse), "reading PETSC_OPTIONS");
     }
   }
   return levels;

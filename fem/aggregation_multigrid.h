@@ -27,6 +27,8 @@
 #include <cstddef>
 #include <vector>
 
+#include "fem/multigrid_level.h"
+
 namespace fetouch::fem {
 
 struct AggregationSettings {
@@ -38,19 +40,13 @@ struct AggregationSettings {
   int smoother_steps = 2;    // Chebyshev/Jacobi steps before and after the coarse correction (W-cycles)
 };
 
-struct AggregationLevel {
-  std::size_t rows = 0, nonzeros = 0;
-  std::size_t aggregates = 0;       // of this level's nodes (0 on the coarsest)
-  double nodes_per_aggregate = 0;   // this level's nodes that were aggregated, over the aggregates
-};
-
 // Builds the hierarchy of A (square, MPIAIJ or SEQAIJ, rows node by node) into pc, which becomes a
 // PCMG with Chebyshev/Jacobi smoothers; its levels read PETSC_OPTIONS (-mg_levels_*, -mg_coarse_*).
 // `null_space` holds `vectors` vectors of A's local rows, vector v at [v * local_rows + i], and
 // should be orthonormal. Returns the levels, finest first. Collective on A's communicator; throws
 // std::runtime_error when PETSc fails.
-std::vector<AggregationLevel> build_aggregation_multigrid(PC pc, Mat A, const double* null_space, int vectors,
-                                                          const AggregationSettings& settings);
+std::vector<MultigridLevel> build_aggregation_multigrid(PC pc, Mat A, const double* null_space, int vectors,
+                                                        const AggregationSettings& settings);
 
 // The aggregates of a node graph (local, CSR over nodes; `weight` the strength of each edge, self
 // loops ignored): aggregate[i] is node i's aggregate, -1 for a node left out (one with no edges:

@@ -1,6 +1,7 @@
 #include "fem/tangent_system.h"
 
 #include "fem/background_factoriser.h"
+#include "fem/petsc_check.h"
 #include "fem/tangent_system_petsc.h"
 
 #include <dlfcn.h>
@@ -22,17 +23,6 @@
 namespace fetouch::fem {
 
 void limit_library_threads();
-double seconds_since(std::chrono::steady_clock::time_point start);
-
-namespace {
-
-void check(PetscErrorCode code, const char* what) {
-  if (code != 0) throw std::runtime_error(std::string("PETSc error ") + std::to_string(code) + " in " + what);
-}
-
-double since(std::chrono::steady_clock::time_point start) { return seconds_since(start); }
-
-}  // namespace
 
 // One thread inside the libraries: CHOLMOD's OpenMP and OpenBLAS's threads would compete with the
 // solver's own assembly thread and the haptic thread for the 2 cores. Measured: a frame at 12,240
@@ -52,11 +42,6 @@ void limit_library_threads() {
   (void)done;
 }
 
-
-
-double seconds_since(std::chrono::steady_clock::time_point start) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-}
 
 TangentSystem::TangentSystem(MPI_Comm comm) : comm_(comm), petsc_(std::make_unique<Petsc>()) {
   limit_library_threads();
@@ -87,20 +72,20 @@ void TangentSystem::set_pattern(std::vector<int> row_start, std::vector<int> col
   const int local = owned_end - owned_begin;
   if (ranks_ == 1) {
     // PETSc works on these arrays in place: assembly writes values_, PETSc reads them.
-    check(MatCreateSeqAIJWithArrays(PETSC_COMM_SELF, n, n, row_start_.data(), columns_.data(), values_.data(), &p.mat),
+    petsc_check(MatCreateSeqAIJWithArrays(PETSC_COMM_SELF, n, n, row_start_.data(), columns_.data(), values_.data(), &p.mat),
           "creating the tangent matrix");
-    check(VecCreateSeqWithArray(PETSC_COMM_SELF, 1, n, nullptr, &p.b), "creating a vector");
-    check(VecCreateSeqWithArray(PETSC_COMM_SELF, 1, n, nullptr, &p.x), "creating a vector");
+    petsc_check(VecCreateSeqWithArray(PETSC_COMM_SELF, 1, n, nullptr, &p.b), "creating a vector");
+    petsc_check(VecCreateSeqWithArray(PETSC_COMM_SELF, 1, n, nullptr, &p.x), "creating a vector");
   } else {
     // The owned rows, copied in by finish().
     local_row_start_.assign(local + 1, 0);
     for (int i = 0; i <= local; ++i) local_row_start_[i] = row_start_[owned_begin + i] - row_start_[owned_begin];
-    check(MatCreateMPIAIJWithArrays(comm_, local, local, n, n, local_row_start_.data(),
+    petsc_check(MatCreateMPIAIJWithArrays(comm_, local, local, n, n, local_row_start_.data(),
                                     columns_.data() + row_start_[owned_begin], values_.data() + row_start_[owned_begin],
                                     &p.mat),
           "creating the distributed tangent matrix");
-    check(VecCreateMPIWithArray(comm_, 1, local, n, nullptr, &p.b), "creating a vector");
-    check(VecCreateMPIWithArray(comm_, 1, local, n, nullptr, &p.x), "creating a vector");
+    petsc_check(VecCreateMPIWithArray(comm_, 1, local, n, nullptr, &p.b), "creating a vector");
+    petsc_check(VecCreateMPIWithArray(comm_, 1, local, n, nullptr, &p.x), "creating a vector");
   }
   direct_cholmod_ = ranks_ == 1 && method == Method::factorisation;
   factorisation_flops_ = 0;
@@ -118,8 +103,8 @@ void TangentSystem::set_pattern(std::vector<int> row_start, std::vector<int> col
   } else {
     // CHOLMOD's own messages (a matrix that is not positive definite) would reach the terminal.
     PetscBool set = PETSC_FALSE;
-    check(PetscOptionsHasName(nullptr, nullptr, "-mat_cholmod_print", &set), "reading options");
-    if (!set) check(PetscOptionsSetValue(nullptr, "-mat_cholmod_print", "0"), "quietening CHOLMOD");
+    petsc_check(PetscOptionsHasName(nullptr, nullptr, "-mat_cholmod_print", &set), "reading options");
+    if (!set) petsc_check(PetscOptionsSetValue(nullptr, "-mat_cholmod_print", "0"), "quietening CHOLMOD");
     create_solver(ranks_ == 1 ? MATSOLVERCHOLMOD : MATSOLVERMUMPS);
   }
 }
@@ -132,56 +117,56 @@ void TangentSystem::create_solver(const char* type) {
   Petsc& p = *petsc_;
   if (p.ksp) KSPDestroy(&p.ksp);
   p.factored = false;
-  check(KSPCreate(comm_, &p.ksp), "creating the solver");
-  check(KSPSetType(p.ksp, KSPCG), "choosing CG");
-  check(KSPSetNormType(p.ksp, KSP_NORM_UNPRECONDITIONED), "choosing the residual norm");
-  check(KSPGetPC(p.ksp, &p.pc), "getting the preconditioner");
+  petsc_check(KSPCreate(comm_, &p.ksp), "creating the solver");
+  petsc_check(KSPSetType(p.ksp, KSPCG), "choosing CG");
+  petsc_check(KSPSetNormType(p.ksp, KSP_NORM_UNPRECONDITIONED), "choosing the residual norm");
+  petsc_check(KSPGetPC(p.ksp, &p.pc), "getting the preconditioner");
   char requested[64] = "";
   PetscBool given = PETSC_FALSE;
-  check(PetscOptionsGetString(nullptr, nullptr, "-pc_type", requested, sizeof requested, &given), "reading options");
+  petsc_check(PetscOptionsGetString(nullptr, nullptr, "-pc_type", requested, sizeof requested, &given), "reading options");
   gamg_ = method_ == Method::amg && given && std::string(requested) == PCGAMG;
   if (method_ == Method::amg && !gamg_) {
     // Our aggregation of nodes (fem/aggregation_multigrid.h): its levels are built at each set-up
     // (factor()). PETSc's GAMG, below, on request: on a block cut into tetrahedra it made 3 nodes an
     // aggregate and failed its set-up at 334,620 DOFs (docs/benchmarks.md).
-    check(PCSetType(p.pc, PCMG), "choosing algebraic multigrid");
+    petsc_check(PCSetType(p.pc, PCMG), "choosing algebraic multigrid");
     aggregation_levels_.clear();
     solver_type_ = "aggregation";
   } else if (method_ == Method::amg) {
-    check(PCSetType(p.pc, PCGAMG), "choosing algebraic multigrid");
+    petsc_check(PCSetType(p.pc, PCGAMG), "choosing algebraic multigrid");
     // Plain (unsmoothed) aggregation: sparser coarse operators, so a set-up and a V-cycle cost about
     // half as much, for 1.7x the CG iterations. Measured on bench_fem's block at 10,080 DOFs: a
     // frame 8.96 -> 6.33 ms mean, 120 -> 50 ms slowest. PETSC_OPTIONS (-pc_gamg_agg_nsmooths) overrides.
-    check(PCGAMGSetNSmooths(p.pc, 0), "choosing plain aggregation");
+    petsc_check(PCGAMGSetNSmooths(p.pc, 0), "choosing plain aggregation");
     // Aggregates of nodes, not of single dofs (PETSc takes a node's dofs as one vertex of its graph
     // when the matrix has their block size), matched along the heaviest couplings (HEM). PETSc's
     // default (MIS on the graph of single dofs) grouped about five dofs, and each group's 6
     // rigid-body modes made the first coarse level 43 % of the fine one (docs/benchmarks.md).
-    check(MatSetBlockSize(p.mat, node_block_), "telling the nodes");
+    petsc_check(MatSetBlockSize(p.mat, node_block_), "telling the nodes");
     PetscBool chosen = PETSC_FALSE;
-    check(PetscOptionsHasName(nullptr, nullptr, "-mat_coarsen_type", &chosen), "reading options");
-    if (!chosen) check(PetscOptionsSetValue(nullptr, "-mat_coarsen_type", "hem"), "choosing the aggregation");
+    petsc_check(PetscOptionsHasName(nullptr, nullptr, "-mat_coarsen_type", &chosen), "reading options");
+    if (!chosen) petsc_check(PetscOptionsSetValue(nullptr, "-mat_coarsen_type", "hem"), "choosing the aggregation");
     if (near_null_vectors_ > 0) {
       // The rigid-body modes (orthonormal, as PETSc requires) as GAMG's near-null space.
       const int local = owned_end_ - owned_begin_;
       std::vector<Vec> vectors(near_null_vectors_);
       for (int k = 0; k < near_null_vectors_; ++k) {
-        check(VecCreateMPI(comm_, local, PETSC_DETERMINE, &vectors[k]), "creating a null-space vector");
+        petsc_check(VecCreateMPI(comm_, local, PETSC_DETERMINE, &vectors[k]), "creating a null-space vector");
         double* a = nullptr;
-        check(VecGetArray(vectors[k], &a), "filling a null-space vector");
+        petsc_check(VecGetArray(vectors[k], &a), "filling a null-space vector");
         std::copy_n(near_null_space_.begin() + std::size_t(k) * local, local, a);
-        check(VecRestoreArray(vectors[k], &a), "filling a null-space vector");
+        petsc_check(VecRestoreArray(vectors[k], &a), "filling a null-space vector");
       }
       MatNullSpace space;
-      check(MatNullSpaceCreate(comm_, PETSC_FALSE, near_null_vectors_, vectors.data(), &space), "the near-null space");
-      check(MatSetNearNullSpace(p.mat, space), "setting the near-null space");
+      petsc_check(MatNullSpaceCreate(comm_, PETSC_FALSE, near_null_vectors_, vectors.data(), &space), "the near-null space");
+      petsc_check(MatSetNearNullSpace(p.mat, space), "setting the near-null space");
       MatNullSpaceDestroy(&space);
       for (Vec& v : vectors) VecDestroy(&v);
     }
     solver_type_ = "gamg";
   } else {
-    check(PCSetType(p.pc, PCCHOLESKY), "choosing Cholesky");
-    check(PCFactorSetMatSolverType(p.pc, type), "choosing the factorisation");
+    petsc_check(PCSetType(p.pc, PCCHOLESKY), "choosing Cholesky");
+    petsc_check(PCFactorSetMatSolverType(p.pc, type), "choosing the factorisation");
     solver_type_ = type;
     // MUMPS with its null-pivot detection (ICNTL(24) = 1; the threshold, CNTL(3), left at MUMPS's
     // default, which scales with machine precision and K's norm): a tangent that is singular, not only
@@ -192,12 +177,12 @@ void TangentSystem::create_solver(const char* type) {
     // singular"; with it the frame converged at once. PETSC_OPTIONS overrides.
     if (std::string(type) == MATSOLVERMUMPS) {
       PetscBool chosen = PETSC_FALSE;
-      check(PetscOptionsHasName(nullptr, nullptr, "-mat_mumps_icntl_24", &chosen), "reading options");
-      if (!chosen) check(PetscOptionsSetValue(nullptr, "-mat_mumps_icntl_24", "1"), "choosing null-pivot detection");
+      petsc_check(PetscOptionsHasName(nullptr, nullptr, "-mat_mumps_icntl_24", &chosen), "reading options");
+      if (!chosen) petsc_check(PetscOptionsSetValue(nullptr, "-mat_mumps_icntl_24", "1"), "choosing null-pivot detection");
     }
   }
-  check(KSPSetOperators(p.ksp, p.mat, p.mat), "setting the operator");
-  check(KSPSetFromOptions(p.ksp), "reading PETSC_OPTIONS");
+  petsc_check(KSPSetOperators(p.ksp, p.mat, p.mat), "setting the operator");
+  petsc_check(KSPSetFromOptions(p.ksp), "reading PETSC_OPTIONS");
 }
 
 int TangentSystem::position(int row, int column) const {
@@ -228,11 +213,11 @@ void TangentSystem::finish(const std::vector<bool>& constrained) {
 void TangentSystem::push_values() {
   if (ranks_ == 1) {
     // Tells PETSc the values changed (they were written in place).
-    check(MatAssemblyBegin(petsc_->mat, MAT_FINAL_ASSEMBLY), "assembling the tangent");
-    check(MatAssemblyEnd(petsc_->mat, MAT_FINAL_ASSEMBLY), "assembling the tangent");
+    petsc_check(MatAssemblyBegin(petsc_->mat, MAT_FINAL_ASSEMBLY), "assembling the tangent");
+    petsc_check(MatAssemblyEnd(petsc_->mat, MAT_FINAL_ASSEMBLY), "assembling the tangent");
   } else {
     const int local = owned_end_ - owned_begin_, size = static_cast<int>(rows());
-    check(MatUpdateMPIAIJWithArrays(petsc_->mat, local, local, size, size, local_row_start_.data(),
+    petsc_check(MatUpdateMPIAIJWithArrays(petsc_->mat, local, local, size, size, local_row_start_.data(),
                                     columns_.data() + row_start_[owned_begin_], values_.data() + row_start_[owned_begin_]),
           "updating the distributed tangent");
   }
@@ -242,7 +227,7 @@ void TangentSystem::factor(SolveStats& stats) {
   limit_library_threads();
   Petsc& p = *petsc_;
   const auto start = std::chrono::steady_clock::now();
-  check(PCSetReusePreconditioner(p.pc, PETSC_FALSE), "refactorising");
+  petsc_check(PCSetReusePreconditioner(p.pc, PETSC_FALSE), "refactorising");
   if (method_ == Method::amg && !gamg_) build_multigrid();  // tangent_system_multigrid.cc
   // CHOLMOD reports a K that is not positive definite as an error: caught quietly, then LDL'.
   PetscPushErrorHandler(PetscReturnErrorHandler, nullptr);
@@ -250,14 +235,14 @@ void TangentSystem::factor(SolveStats& stats) {
   if (code == 0) code = PCSetUp(p.pc);    // later: K's values changed
   PetscPopErrorHandler();
   PCFailedReason failed = PC_NOERROR;
-  if (code == 0) check(PCGetFailedReason(p.pc, &failed), "checking the factorisation");
+  if (code == 0) petsc_check(PCGetFailedReason(p.pc, &failed), "checking the factorisation");
   if ((code != 0 || failed != PC_NOERROR) && method_ == Method::factorisation &&
       std::string(solver_type_) != MATSOLVERMUMPS) {
     create_solver(MATSOLVERMUMPS);
-    check(KSPSetUp(p.ksp), "factorising the tangent");
-    check(PCGetFailedReason(p.pc, &failed), "checking the factorisation");
+    petsc_check(KSPSetUp(p.ksp), "factorising the tangent");
+    petsc_check(PCGetFailedReason(p.pc, &failed), "checking the factorisation");
   } else {
-    check(code, "factorising the tangent");
+    petsc_check(code, "factorising the tangent");
   }
   if (failed != PC_NOERROR) {
     // The preconditioner now holds a failed factorisation, which PETSc would keep (and apply) while
@@ -267,13 +252,13 @@ void TangentSystem::factor(SolveStats& stats) {
     throw std::runtime_error("the tangent stiffness is singular (factorisation failed)");
   }
   // Later solves keep this factorisation as the preconditioner while K changes.
-  check(PCSetReusePreconditioner(p.pc, PETSC_TRUE), "keeping the factorisation");
+  petsc_check(PCSetReusePreconditioner(p.pc, PETSC_TRUE), "keeping the factorisation");
   p.factored = true;
   refactor_ = false;
   baseline_iterations_ = -1;
   ++factorisations_;
   stats.refactored = true;
-  stats.factor_s += since(start);
+  stats.factor_s += seconds_since(start);
 }
 
 void TangentSystem::gather(double* x) const {
@@ -300,11 +285,11 @@ bool TangentSystem::factored() const { return direct_cholmod_ ? factor_ && facto
 void TangentSystem::apply_factor(const double* b, double* x) {
   if (direct_cholmod_) return apply_cholmod(b, x, 1);
   Petsc& p = *petsc_;
-  check(VecPlaceArray(p.b, b + owned_begin_), "wrapping a right-hand side");
-  check(VecPlaceArray(p.x, x + owned_begin_), "wrapping a solution");
+  petsc_check(VecPlaceArray(p.b, b + owned_begin_), "wrapping a right-hand side");
+  petsc_check(VecPlaceArray(p.x, x + owned_begin_), "wrapping a solution");
   const PetscErrorCode code = PCApply(p.pc, p.b, p.x);
   VecResetArray(p.b), VecResetArray(p.x);
-  check(code, "applying the factorisation");
+  petsc_check(code, "applying the factorisation");
   gather(x);
 }
 
@@ -369,16 +354,16 @@ void TangentSystem::apply_raw(const double* b, double* x, int columns, SolveStat
   } else if (ranks_ == 1 && method_ == Method::factorisation) {
     Petsc& p = *petsc_;
     Mat rhs = nullptr, solution = nullptr;
-    check(MatCreateSeqDense(PETSC_COMM_SELF, n, columns, const_cast<double*>(b), &rhs), "wrapping right-hand sides");
-    check(MatCreateSeqDense(PETSC_COMM_SELF, n, columns, x, &solution), "wrapping solutions");
+    petsc_check(MatCreateSeqDense(PETSC_COMM_SELF, n, columns, const_cast<double*>(b), &rhs), "wrapping right-hand sides");
+    petsc_check(MatCreateSeqDense(PETSC_COMM_SELF, n, columns, x, &solution), "wrapping solutions");
     const PetscErrorCode code = PCMatApply(p.pc, rhs, solution);
     MatDestroy(&rhs);
     MatDestroy(&solution);
-    check(code, "applying the factorisation to a block");
+    petsc_check(code, "applying the factorisation to a block");
   } else {  // one column at a time
     for (int k = 0; k < columns; ++k) apply_factor(b + std::size_t(k) * n, x + std::size_t(k) * n);
   }
-  stats.solve_s += since(start);
+  stats.solve_s += seconds_since(start);
 }
 
 

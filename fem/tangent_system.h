@@ -47,6 +47,7 @@
 #include <vector>
 
 #include "fem/cholesky_factor.h"
+#include "fem/multigrid_level.h"
 
 namespace fetouch::fem {
 
@@ -181,11 +182,7 @@ class TangentSystem {
   // level's operator. Empty for the direct path and before the first AMG solve. Collective under MPI.
   // Under our aggregation, also the aggregates of each level's nodes and their mean size (0 on the
   // coarsest and under GAMG).
-  struct Level {
-    std::size_t rows = 0, nonzeros = 0;
-    std::size_t aggregates = 0;
-    double nodes_per_aggregate = 0;
-  };
+  using Level = MultigridLevel;
   std::vector<Level> multigrid_levels() const;
   // All levels' nonzeros over the fine level's (0 without levels).
   static double operator_complexity(const std::vector<Level>& levels);

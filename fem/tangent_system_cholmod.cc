@@ -19,16 +19,12 @@
 #include <thread>
 
 #include "fem/background_factoriser.h"
+#include "fem/petsc_check.h"
 #include "fem/tangent_system.h"
 
 namespace fetouch::fem {
 
 void limit_library_threads();  // tangent_system.cc
-double seconds_since(std::chrono::steady_clock::time_point start);
-
-namespace {
-double since(std::chrono::steady_clock::time_point start) { return seconds_since(start); }
-}  // namespace
 
 void TangentSystem::reset_cholmod() {
   worker_.reset();
@@ -55,7 +51,7 @@ bool TangentSystem::factor_cholmod(SolveStats& stats) {
   limit_library_threads();
   const auto start = std::chrono::steady_clock::now();
   const bool ok = factor_->factorise(values_.data());
-  stats.factor_s += since(start);
+  stats.factor_s += seconds_since(start);
   if (!ok) {  // not positive definite: PETSc's MUMPS LDL' for this K (leave_cholmod)
     leave_cholmod();
     return false;
@@ -160,11 +156,11 @@ double TangentSystem::take_background(bool wait) {
     values_.swap(snapshot_);
     push_values();
     if (code != 0) refactor_ = true;  // that K was singular: the next solve refactors the current one
-    return since(start);
+    return seconds_since(start);
   }
   std::unique_lock<std::mutex> lock(worker_->mutex);
   if (wait) worker_->cv.wait(lock, [this] { return worker_->done; });
-  const double waited = since(start);
+  const double waited = seconds_since(start);
   if (!worker_->done) return waited;
   worker_->requested = worker_->done = false;
   frames_since_request_ = -1;
@@ -246,7 +242,7 @@ TangentSystem::SolveStats TangentSystem::solve_factorised(const double* b, doubl
     const auto start = std::chrono::steady_clock::now();
     const InDouble in_double(in_double_, true);
     precondition(b, x);
-    stats.solve_s += since(start);
+    stats.solve_s += seconds_since(start);
     stats.rank_one = rank_one_c_ != 0;
   };
   if (!factored() || refactor_) {
@@ -284,7 +280,7 @@ TangentSystem::SolveStats TangentSystem::solve_factorised(const double* b, doubl
     converged = residual <= target;
   }
   stats.iterations = iterations;
-  stats.solve_s += since(start);
+  stats.solve_s += seconds_since(start);
   if (converged) {
     stats.rank_one = rank_one_c_ != 0;
     // Against the factorisation's own matrix CG takes one iteration: more than

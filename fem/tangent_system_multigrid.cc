@@ -9,22 +9,11 @@
 #include <string>
 
 #include "fem/aggregation_multigrid.h"
+#include "fem/petsc_check.h"
 #include "fem/tangent_system.h"
 #include "fem/tangent_system_petsc.h"
 
 namespace fetouch::fem {
-
-double seconds_since(std::chrono::steady_clock::time_point start);  // tangent_system.cc
-
-namespace {
-
-void check(PetscErrorCode code, const char* what) {
-  if (code != 0) throw std::runtime_error(std::string("PETSc error ") + std::to_string(code) + " in " + what);
-}
-
-double since(std::chrono::steady_clock::time_point start) { return seconds_since(start); }
-
-}  // namespace
 
 void TangentSystem::build_multigrid() {
   Petsc& p = *petsc_;
@@ -36,12 +25,10 @@ void TangentSystem::build_multigrid() {
     settings.node_block = node_block_;
     // PETSC_OPTIONS=-fetouch_aggregation_smoothings 1: smoothed aggregation (docs/benchmarks.md).
     PetscInt smoothings = settings.smoothings;
-    check(PetscOptionsGetInt(nullptr, nullptr, "-fetouch_aggregation_smoothings", &smoothings, nullptr), "reading options");
+    petsc_check(PetscOptionsGetInt(nullptr, nullptr, "-fetouch_aggregation_smoothings", &smoothings, nullptr), "reading options");
     settings.smoothings = static_cast<int>(smoothings);
-    const std::vector<AggregationLevel> built =
+    aggregation_levels_ =
         build_aggregation_multigrid(p.pc, p.mat, near_null_space_.data(), near_null_vectors_, settings);
-    for (const AggregationLevel& l : built)
-      aggregation_levels_.push_back({l.rows, l.nonzeros, l.aggregates, l.nodes_per_aggregate});
   } catch (const std::runtime_error&) {
     create_solver(nullptr);  // no half-built hierarchy is kept
     throw;
@@ -83,23 +70,23 @@ TangentSystem::SolveStats TangentSystem::solve(const double* b, double* x, doubl
   const int n = static_cast<int>(rows());
   if (zero_guess) std::fill(x, x + n, 0.0);
   // Each rank hands PETSc its owned block of the whole vectors.
-  check(VecPlaceArray(p.b, b + owned_begin_), "wrapping the right-hand side");
-  check(VecPlaceArray(p.x, x + owned_begin_), "wrapping the solution");
+  petsc_check(VecPlaceArray(p.b, b + owned_begin_), "wrapping the right-hand side");
+  petsc_check(VecPlaceArray(p.x, x + owned_begin_), "wrapping the solution");
   struct Unplace {
     Petsc& p;
     ~Unplace() { VecResetArray(p.b), VecResetArray(p.x); }
   } unplace{p};
   const auto cg = [&](int limit) {
     const auto start = std::chrono::steady_clock::now();
-    check(KSPSetInitialGuessNonzero(p.ksp, PETSC_TRUE), "setting the initial guess");
-    check(KSPSetTolerances(p.ksp, tolerance, 0.0, 1e30, limit), "setting tolerances");
-    check(KSPSolve(p.ksp, p.b, p.x), "conjugate gradients");
+    petsc_check(KSPSetInitialGuessNonzero(p.ksp, PETSC_TRUE), "setting the initial guess");
+    petsc_check(KSPSetTolerances(p.ksp, tolerance, 0.0, 1e30, limit), "setting tolerances");
+    petsc_check(KSPSolve(p.ksp, p.b, p.x), "conjugate gradients");
     KSPConvergedReason reason;
     PetscInt iterations;
-    check(KSPGetConvergedReason(p.ksp, &reason), "checking convergence");
-    check(KSPGetIterationNumber(p.ksp, &iterations), "counting iterations");
+    petsc_check(KSPGetConvergedReason(p.ksp, &reason), "checking convergence");
+    petsc_check(KSPGetIterationNumber(p.ksp, &iterations), "counting iterations");
     stats.iterations += static_cast<int>(iterations);
-    stats.solve_s += since(start);
+    stats.solve_s += seconds_since(start);
     if (reason > 0) {
       if (baseline_iterations_ < 0) baseline_iterations_ = static_cast<int>(iterations);
       // Multigrid drifts from its own first count (a factorisation from one iteration: solve_factorised).
@@ -113,21 +100,21 @@ TangentSystem::SolveStats TangentSystem::solve(const double* b, double* x, doubl
     factor(stats);
     KSPConvergedReason reason = KSP_CONVERGED_ITERATING;
     bool solved = cg(1000);
-    if (!solved) check(KSPGetConvergedReason(p.ksp, &reason), "checking convergence");
+    if (!solved) petsc_check(KSPGetConvergedReason(p.ksp, &reason), "checking convergence");
     if (!solved && reason == KSP_DIVERGED_INDEFINITE_MAT) {
       // K is not positive definite here (Newton passing a state where some elements are squeezed
       // hard: the 334,620-DOF press met one in its 13th solve, CG stopping after 2 iterations on a
       // fresh hierarchy). GMRES on the same multigrid does not need K definite; the next solve is
       // CG again. Right-preconditioned, so that its residual is K's own, as CG's.
-      check(VecZeroEntries(p.x), "restarting from zero");
-      check(KSPSetType(p.ksp, KSPGMRES), "choosing GMRES");
-      check(KSPGMRESSetRestart(p.ksp, 200), "choosing GMRES");
-      check(KSPSetPCSide(p.ksp, PC_RIGHT), "choosing GMRES");
-      check(KSPSetNormType(p.ksp, KSP_NORM_UNPRECONDITIONED), "choosing the residual norm");
+      petsc_check(VecZeroEntries(p.x), "restarting from zero");
+      petsc_check(KSPSetType(p.ksp, KSPGMRES), "choosing GMRES");
+      petsc_check(KSPGMRESSetRestart(p.ksp, 200), "choosing GMRES");
+      petsc_check(KSPSetPCSide(p.ksp, PC_RIGHT), "choosing GMRES");
+      petsc_check(KSPSetNormType(p.ksp, KSP_NORM_UNPRECONDITIONED), "choosing the residual norm");
       solved = cg(1000);
-      check(KSPSetType(p.ksp, KSPCG), "choosing CG");
-      check(KSPSetPCSide(p.ksp, PC_LEFT), "choosing CG");
-      check(KSPSetNormType(p.ksp, KSP_NORM_UNPRECONDITIONED), "choosing the residual norm");
+      petsc_check(KSPSetType(p.ksp, KSPCG), "choosing CG");
+      petsc_check(KSPSetPCSide(p.ksp, PC_LEFT), "choosing CG");
+      petsc_check(KSPSetNormType(p.ksp, KSP_NORM_UNPRECONDITIONED), "choosing the residual norm");
       ++indefinite_solves_;
     }
     if (!solved) {
@@ -139,8 +126,8 @@ TangentSystem::SolveStats TangentSystem::solve(const double* b, double* x, doubl
       create_solver(MATSOLVERMUMPS);
       factor(stats);
       const auto start = std::chrono::steady_clock::now();
-      check(PCApply(p.pc, p.b, p.x), "solving with the factorisation");
-      stats.solve_s += since(start);
+      petsc_check(PCApply(p.pc, p.b, p.x), "solving with the factorisation");
+      stats.solve_s += seconds_since(start);
     }
   }
   gather(x);
