@@ -197,7 +197,7 @@ struct Solver {
   bool line_search = true;
   int max_load_step_cuts = 8;
   LinearSolver linear_solver = LinearSolver::automatic;
-  int direct_max_dofs = 200000;  // automatic: direct up to this size, CG + AMG above (docs/benchmarks.md)
+  int direct_max_dofs = 95000;  // automatic: direct up to this size, CG + AMG above (docs/benchmarks.md)
   // The accuracy a frame needs, in the haptic loop's units (0, or `accuracy: none`: off, the
   // residual tolerances alone): each contact's displacement to within position_m (a fifth of a
   // Touch / Omni's nominal 0.055 mm position resolution) and no out-of-balance nodal force over
