@@ -10,6 +10,7 @@
 #include <Eigen/Cholesky>
 
 #include "fem/physical_problem.h"
+#include "fem/stopwatch.h"
 
 namespace fetouch::fem {
 
@@ -123,7 +124,7 @@ void FemEnvironment::solve(const std::vector<haptics::ContactSample>& samples, l
   out.status.iterations = report.total_iterations;
   if (!report.steps.empty() && !report.steps.back().residuals.empty())
     out.status.residual = report.steps.back().residuals.back();
-  out.status.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  out.status.seconds = seconds_since(start);
   out.status.differs_from_lockstep = solver_->late_background_frames() != late_before;
   out.frame = frame;
   // FETOUCH_TRACE_FRAMES=1: where each frame's time went, one line per frame on standard error.

@@ -1,5 +1,7 @@
 #include "fem/newton_driver.h"
 
+#include "fem/stopwatch.h"
+
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -8,14 +10,6 @@
 namespace fetouch::fem {
 
 using namespace dealii;
-
-namespace {
-
-double since(std::chrono::steady_clock::time_point start) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-}
-
-}  // namespace
 
 NewtonDriver::NewtonDriver(const Discretisation& d, LinearSystem& system, const std::vector<Support>& supports,
                            Vector<double>& u)
@@ -38,19 +32,19 @@ bool NewtonDriver::assemble(double lambda, Vector<double>& r, bool tangent, Vect
   const auto timed = [&](std::size_t i) {
     const auto term_start = std::chrono::steady_clock::now();
     const bool ok = terms_[i]->assemble(state, target);
-    term_times[i].assembly_s += since(term_start);
+    term_times[i].assembly_s += seconds_since(term_start);
     return ok;
   };
   bool ok = true;
   system_.assembled();  // before the terms: one that fails may have moved g already
   for (std::size_t i = 0; i < terms_.size(); ++i)
     if (terms_[i]->distributed() && ok) ok = timed(i);
-  if (!d_.all_ranks(ok)) return assembly_s += since(start), false;
+  if (!d_.all_ranks(ok)) return assembly_s += seconds_since(start), false;
   d_.sum_over_ranks(r.begin(), r.size());
   if (internal) d_.sum_over_ranks(internal->begin(), internal->size());
   if (tangent) d_.sum_over_ranks(k.values(), k.nonzeros());
   for (std::size_t i = 0; i < terms_.size(); ++i)
-    if (!terms_[i]->distributed() && !timed(i)) return assembly_s += since(start), false;
+    if (!terms_[i]->distributed() && !timed(i)) return assembly_s += seconds_since(start), false;
   if (tangent) {
     tangent_assembled_ = true;
     k.finish(system_.constrained());
@@ -67,7 +61,7 @@ bool NewtonDriver::assemble(double lambda, Vector<double>& r, bool tangent, Vect
     tangent_current_ = true;
   }
   system_.constraints().set_zero(r);
-  assembly_s += since(start);
+  assembly_s += seconds_since(start);
   return true;
 }
 
@@ -108,7 +102,7 @@ void NewtonDriver::own(std::size_t i, const Work& work) {
   const auto start = std::chrono::steady_clock::now();
   const int iterations = system_.times.linear_iterations;
   work();
-  term_times[i].other_s += since(start);
+  term_times[i].other_s += seconds_since(start);
   term_times[i].linear_iterations += system_.times.linear_iterations - iterations;
 }
 

@@ -11,6 +11,7 @@
 
 #include "fem/boundary_geometry.h"
 #include "fem/solver_parts.h"
+#include "fem/stopwatch.h"
 
 namespace fetouch::fem {
 
@@ -269,7 +270,7 @@ SolveReport QuasiStaticSolver::solve(const NewtonSettings& s) {
     report.terms.push_back(m.driver.term_times[i]);
     report.terms.back().name = terms[i]->name();
   }
-  report.total_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
+  report.total_s = seconds_since(started);
   return report;
 }
 
@@ -282,7 +283,7 @@ FullMatrix<double> QuasiStaticSolver::compliance() {
     if (!m.driver.assemble(1.0, r, /*tangent=*/true)) throw std::runtime_error("compliance: an element is inverted");
   }
   m.compliance_times = ComplianceTimes();
-  m.compliance_times.assembly_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  m.compliance_times.assembly_s = seconds_since(start);
   std::vector<Vector<double>> h;
   for (int a = 0; a < patches(); ++a)
     for (int c = 0; c < 3; ++c) {
@@ -290,7 +291,7 @@ FullMatrix<double> QuasiStaticSolver::compliance() {
       m.system.constraints().set_zero(h.back());
     }
   FullMatrix<double> w = m.compliance.compute(m.system, h, m.compliance_times);
-  m.compliance_times.total_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  m.compliance_times.total_s = seconds_since(start);
   return w;
 }
 

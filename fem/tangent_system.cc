@@ -2,6 +2,7 @@
 
 #include "fem/background_factoriser.h"
 #include "fem/petsc_check.h"
+#include "fem/stopwatch.h"
 #include "fem/tangent_system_petsc.h"
 
 #include <dlfcn.h>

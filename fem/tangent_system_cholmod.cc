@@ -20,6 +20,7 @@
 
 #include "fem/background_factoriser.h"
 #include "fem/petsc_check.h"
+#include "fem/stopwatch.h"
 #include "fem/tangent_system.h"
 
 namespace fetouch::fem {

@@ -10,6 +10,7 @@
 
 #include "fem/aggregation_multigrid.h"
 #include "fem/petsc_check.h"
+#include "fem/stopwatch.h"
 #include "fem/tangent_system.h"
 #include "fem/tangent_system_petsc.h"
 
