@@ -1,11 +1,15 @@
 # Compiler launcher, warnings and sanitizers shared by every Fetouch target.
 
 # ccache makes the second build of an unchanged tree (and CI on a machine that built before) fast.
+# Its base directory is the source tree, so that the compile lines' absolute paths (-I/path/to/clone/...)
+# are hashed relative to it and a clone in another folder (a fresh clone for CI or the README's test
+# command) finds what this one compiled; with ccache's default (no base directory) it found nothing.
 find_program(FETOUCH_CCACHE ccache)
 if(FETOUCH_CCACHE AND NOT CMAKE_CXX_COMPILER_LAUNCHER)
-  set(CMAKE_C_COMPILER_LAUNCHER ${FETOUCH_CCACHE})
-  set(CMAKE_CXX_COMPILER_LAUNCHER ${FETOUCH_CCACHE})
-  message(STATUS "Fetouch: compiling through ${FETOUCH_CCACHE}")
+  set(FETOUCH_CCACHE_LAUNCHER env CCACHE_BASEDIR=${CMAKE_SOURCE_DIR} ${FETOUCH_CCACHE})
+  set(CMAKE_C_COMPILER_LAUNCHER ${FETOUCH_CCACHE_LAUNCHER})
+  set(CMAKE_CXX_COMPILER_LAUNCHER ${FETOUCH_CCACHE_LAUNCHER})
+  message(STATUS "Fetouch: compiling through ${FETOUCH_CCACHE} (base directory ${CMAKE_SOURCE_DIR})")
 endif()
 
 # Warnings for our own code only; applied per target by fetouch_target_defaults().
