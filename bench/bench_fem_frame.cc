@@ -8,7 +8,8 @@
 // balance, W to 1e-3, at most 4 Newton iterations a frame). Serial, or under mpirun -np 2 (a fixed
 // 60 frames per case).
 // Assembly: one residual and tangent assembly of the same block, on 1 or 2 threads (nothing else
-// running: the frame's background factorisation shares the second core).
+// running: the frame's background factorisation shares the second core), with the split tangent
+// kernel the solver uses (split:1) or the full 81-entry tangent's (split:0, FullTangentOnly).
 //   build/release/bench/bench_fem --benchmark_filter=Frame
 #include <benchmark/benchmark.h>
 #include <deal.II/grid/grid_generator.h>
@@ -21,6 +22,7 @@
 #include <cstdlib>
 #include <vector>
 
+#include "fem/full_tangent_only.h"
 #include "fem/material.h"
 #include "fem/mpi_session.h"
 #include "fem/quasi_static_solver.h"
@@ -118,7 +120,9 @@ void BM_FemAssembly(benchmark::State& state) {
   const unsigned int n = static_cast<unsigned int>(state.range(1));
   dealii::Triangulation<3> tria;
   block(tria, n);
-  const NeoHookean material(lame_lambda(5000, 0.45), lame_mu(5000, 0.45));
+  const NeoHookean neo_hookean(lame_lambda(5000, 0.45), lame_mu(5000, 0.45));
+  const FullTangentOnly full(neo_hookean);
+  const Material& material = state.range(3) ? static_cast<const Material&>(neo_hookean) : full;
   QuasiStaticSolver solver(tria, material, degree);
   solver.set_assembly_threads(static_cast<unsigned int>(state.range(2)));
   solver.prescribe_displacement(4, {true, true, true}, dealii::Tensor<1, 3>());
@@ -190,10 +194,12 @@ int main(int argc, char** argv) {
     for (const int amg : {0, 1})
       if (amg == 1 || n < 50) linear->Args({n, amg});
   auto* assembly = benchmark::RegisterBenchmark("BM_FemAssembly", BM_FemAssembly);
-  assembly->ArgNames({"degree", "n", "threads"})->Unit(benchmark::kMillisecond)->UseManualTime();
+  assembly->ArgNames({"degree", "n", "threads", "split"})->Unit(benchmark::kMillisecond)->UseManualTime();
   for (const int threads : {1, 2}) {
-    for (const int n : {10, 14, 20}) assembly->Args({1, n, threads});
-    for (const int n : {5, 9}) assembly->Args({2, n, threads});
+    for (const int split : {1, 0}) {
+      for (const int n : {10, 14, 20}) assembly->Args({1, n, threads, split});
+      for (const int n : {5, 9}) assembly->Args({2, n, threads, split});
+    }
   }
   if (ranks > 1) frames->Iterations(60), large->Iterations(60);
   benchmark::Initialize(&argc, argv);

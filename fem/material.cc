@@ -44,6 +44,19 @@ bool LinearElastic::evaluate(const Tensor2& F, Tensor2& P, Tensor4* A) const {
   return true;
 }
 
+bool Material::evaluate_split(const Tensor2&, Tensor2&, SplitTangent&) const {
+  throw std::logic_error(name() + " has no split tangent");
+}
+
+// lambda d_iJ d_kL + mu (d_ik d_JL + d_iL d_kJ): H = I, beta = lambda, alpha = gamma = mu.
+bool LinearElastic::evaluate_split(const Tensor2& F, Tensor2& P, SplitTangent& t) const {
+  evaluate(F, P, nullptr);
+  t = SplitTangent{};
+  t.H = identity();
+  t.alpha = mu_, t.beta = lambda_, t.gamma = mu_;
+  return true;
+}
+
 // ---- isotropic hyperelasticity in invariants ---------------------------------------------------
 
 double InvariantMaterial::energy(const Tensor2& F) const {
@@ -93,6 +106,27 @@ bool InvariantMaterial::evaluate(const Tensor2& F, Tensor2& P, Tensor4* A) const
   const double diagonal = 2 * d.d[0] + 2 * i1 * d1;  // the d_ik d_JL terms of d2I1 and d2I2
   for (int i = 0; i < dim; ++i)
     for (int J = 0; J < dim; ++J) a[i][J][i][J] += diagonal;
+  return true;
+}
+
+// With psi_2 = 0: P = 2 psi_1 F + psi_J J H, and A = 2 psi_1 d_ik d_JL + 4 h_11 F x F
+// + 2 J h_1J (F x H + H x F) + (J^2 h_JJ + J psi_J) H x H - J psi_J H_iL H_kJ (H = F^-T).
+bool InvariantMaterial::evaluate_split(const Tensor2& F, Tensor2& P, SplitTangent& t) const {
+  if (!has_split_tangent()) return Material::evaluate_split(F, P, t);  // throws
+  const double j = dealii::determinant(F);
+  if (!(j > 0)) return false;
+  const Tensor2 c = dealii::transpose(F) * F;
+  const double i1 = dealii::trace(c), i2 = 0.5 * (i1 * i1 - dealii::scalar_product(c, c));
+  const InvariantDerivatives d = derivatives(i1, i2, j);
+  if (d.d[1] != 0 || d.h[0][1] != 0 || d.h[1][1] != 0 || d.h[1][2] != 0)
+    throw std::logic_error(name() + " depends on I2: no split tangent");
+  t.H = dealii::transpose(dealii::invert(F));
+  P = 2 * d.d[0] * F + d.d[2] * j * t.H;
+  t.alpha = 2 * d.d[0];
+  t.zeta = 4 * d.h[0][0];
+  t.eta = 2 * j * d.h[0][2];
+  t.beta = j * j * d.h[2][2] + j * d.d[2];
+  t.gamma = -j * d.d[2];
   return true;
 }
 

@@ -34,6 +34,16 @@ namespace fetouch::fem {
 using Tensor2 = dealii::Tensor<2, 3>;
 using Tensor4 = dealii::Tensor<4, 3>;
 
+// The tangent of the models without I2 (neo-Hookean, coupled and decoupled; linear elasticity with
+// H = I) in five scalars and H = F^-T:
+//   A_iJkL = alpha d_ik d_JL + zeta F_iJ F_kL + beta H_iJ H_kL + gamma H_iL H_kJ + eta (F_iJ H_kL + H_iJ F_kL).
+// The assembly contracts it with the base functions' gradients directly (K_(a,i)(b,k) needs F grad N
+// and H grad N of each base function, not the 81 entries of A): the assembly's hot loop.
+struct SplitTangent {
+  double alpha = 0, zeta = 0, beta = 0, gamma = 0, eta = 0;
+  Tensor2 H;
+};
+
 class Material {
  public:
   virtual ~Material() = default;
@@ -42,6 +52,10 @@ class Material {
   virtual double energy(const Tensor2& F) const = 0;
   // P(F) and, if `tangent` is not null, A(F). Returns false (and leaves them unset) if J <= 0.
   virtual bool evaluate(const Tensor2& F, Tensor2& stress, Tensor4* tangent) const = 0;
+  // Whether evaluate_split() applies; P(F) and the split tangent, which equals evaluate()'s A
+  // (tests check it). False (and nothing set) if J <= 0; throws std::logic_error without a split.
+  virtual bool has_split_tangent() const { return false; }
+  virtual bool evaluate_split(const Tensor2& F, Tensor2& stress, SplitTangent& tangent) const;
   // The small-strain shear modulus and the bulk modulus: for time steps, penalties, scaling.
   virtual double shear_modulus() const = 0;
   virtual double bulk_modulus() const = 0;
@@ -56,6 +70,8 @@ class LinearElastic final : public Material {
   std::string name() const override { return "linear_elastic"; }
   double energy(const Tensor2& F) const override;
   bool evaluate(const Tensor2& F, Tensor2& stress, Tensor4* tangent) const override;
+  bool has_split_tangent() const override { return true; }
+  bool evaluate_split(const Tensor2& F, Tensor2& stress, SplitTangent& tangent) const override;
   double shear_modulus() const override { return mu_; }
   double bulk_modulus() const override { return lambda_ + 2 * mu_ / 3; }
 
@@ -74,6 +90,8 @@ class InvariantMaterial : public Material {
  public:
   double energy(const Tensor2& F) const override;
   bool evaluate(const Tensor2& F, Tensor2& stress, Tensor4* tangent) const override;
+  // For the models with psi_2 = 0 and no I2 in the Hessian (the subclasses that say so).
+  bool evaluate_split(const Tensor2& F, Tensor2& stress, SplitTangent& tangent) const override;
   // The model itself: psi and its partial derivatives at (I1, I2, J), J > 0.
   virtual InvariantDerivatives derivatives(double i1, double i2, double j) const = 0;
 };
@@ -95,6 +113,7 @@ class NeoHookean final : public InvariantMaterial {
   NeoHookean(double lambda, double mu) : lambda_(lambda), mu_(mu) {}
   std::string name() const override { return "neo_hookean"; }
   InvariantDerivatives derivatives(double i1, double i2, double j) const override;
+  bool has_split_tangent() const override { return true; }
   double shear_modulus() const override { return mu_; }
   double bulk_modulus() const override { return lambda_ + 2 * mu_ / 3; }
 
@@ -108,6 +127,7 @@ class NearlyIncompressibleNeoHookean final : public InvariantMaterial {
   NearlyIncompressibleNeoHookean(double kappa, double mu) : kappa_(kappa), mu_(mu) {}
   std::string name() const override { return "neo_hookean_incompressible"; }
   InvariantDerivatives derivatives(double i1, double i2, double j) const override;
+  bool has_split_tangent() const override { return true; }
   double shear_modulus() const override { return mu_; }
   double bulk_modulus() const override { return kappa_; }
   bool volumetric(double j, double& u1, double& u2) const override;

@@ -1,10 +1,12 @@
 // Materials against independent answers: the stress equals the finite-difference derivative of the
 // energy, the tangent the finite-difference derivative of the stress (large strain, 1e-6 relative),
-// objectivity under rigid rotations, and the linear elastic limit at F = I.
+// objectivity under rigid rotations, and the linear elastic limit at F = I; the split tangent the
+// assembly uses equals the full one.
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <random>
+#include <stdexcept>
 
 #include "fem/material.h"
 
@@ -125,6 +127,45 @@ TEST(Materials, EveryModelReducesToLinearElasticityAtRest) {
     EXPECT_LT(P.norm(), 1e-9 * kE) << material->name();  // stress-free reference configuration
     EXPECT_LT((A - reference).norm(), 1e-9 * reference.norm()) << material->name();
   }
+}
+
+// The five scalars and H of the split form rebuild evaluate()'s A and P (large strain), for the
+// models that have one; the others say they have none and refuse.
+TEST(Materials, SplitTangentRebuildsTheFullTangent) {
+  std::mt19937 rng(10);
+  int split_models = 0;
+  for (const auto& material : all_materials(false)) {
+    if (!material->has_split_tangent()) {
+      Tensor2 P;
+      SplitTangent s;
+      EXPECT_THROW(material->evaluate_split(random_deformation(rng), P, s), std::logic_error) << material->name();
+      continue;
+    }
+    ++split_models;
+    for (int t = 0; t < 20; ++t) {
+      const Tensor2 F = random_deformation(rng);
+      Tensor2 P, p_split;
+      Tensor4 A;
+      SplitTangent s;
+      ASSERT_TRUE(material->evaluate(F, P, &A));
+      ASSERT_TRUE(material->evaluate_split(F, p_split, s));
+      EXPECT_LT((p_split - P).norm(), 1e-12 * P.norm()) << material->name();
+      Tensor4 rebuilt;
+      for (int i = 0; i < 3; ++i)
+        for (int J = 0; J < 3; ++J)
+          for (int k = 0; k < 3; ++k)
+            for (int L = 0; L < 3; ++L)
+              rebuilt[i][J][k][L] = s.alpha * (i == k && J == L) + s.zeta * F[i][J] * F[k][L] +
+                                    s.beta * s.H[i][J] * s.H[k][L] + s.gamma * s.H[i][L] * s.H[k][J] +
+                                    s.eta * (F[i][J] * s.H[k][L] + s.H[i][J] * F[k][L]);
+      EXPECT_LT((rebuilt - A).norm(), 1e-12 * A.norm()) << material->name();
+    }
+  }
+  EXPECT_EQ(split_models, 3);  // linear elastic and both neo-Hookean models
+  Tensor2 inverted, P;
+  inverted[0][0] = -1, inverted[1][1] = 1, inverted[2][2] = 1;
+  SplitTangent s;
+  EXPECT_FALSE(NeoHookean(lame_lambda(kE, kNu), lame_mu(kE, kNu)).evaluate_split(inverted, P, s));
 }
 
 TEST(Materials, InvertedDeformationsAreRejected) {
