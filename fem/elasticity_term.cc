@@ -4,7 +4,9 @@
 
 #include <algorithm>
 #include <array>
+#include <cstdlib>
 #include <stdexcept>
+#include <string>
 #include <thread>
 
 #include "fem/linear_system.h"
@@ -49,11 +51,20 @@ const Material& ElasticityTerm::material_of(unsigned int cell) const {
   return *cell_material_[cell];
 }
 
+namespace {
+// FETOUCH_TANGENT=full: every model's tangent contracted in full, as before the split (to measure).
+bool full_tangent_requested() {
+  static const bool full = [] {
+    const char* requested = std::getenv("FETOUCH_TANGENT");
+    return requested && std::string(requested) == "full";
+  }();
+  return full;
+}
+
 // The blocks a <= b of a point's tangent from the split form (see SplitTangent), f_a = F grad N_a,
 // h_a = H grad N_a:  K_(a,i)(b,k) += jxw [alpha d_ik grad N_a . grad N_b + zeta f_ai f_bk
 // + beta h_ai h_bk + gamma h_ak h_bi + eta (f_ai h_bk + h_ai f_bk)]: three multiply-adds an entry,
 // and no 81-entry A to build or contract (one assembly 11-20 % faster, docs/benchmarks.md).
-namespace {
 template <int NB>
 void add_split_tangent(const Tensor<1, 3>* grad, double jxw, const Tensor2& F, const SplitTangent& S, double* cell_matrix) {
   constexpr int N = 3 * NB;
@@ -72,6 +83,9 @@ void add_split_tangent(const Tensor<1, 3>* grad, double jxw, const Tensor2& F, c
       with_h[i] = beta * h[a][i] + eta * f[a][i];
       crossed[i] = gamma * h[a][i];
     }
+    double diagonal[NB];  // alpha grad_a . grad_b, the same on the three rows of the block
+    for (int b = a; b < NB; ++b)
+      diagonal[b] = alpha * (grad[a][0] * grad[b][0] + grad[a][1] * grad[b][1] + grad[a][2] * grad[b][2]);
     for (int i = 0; i < 3; ++i) {
       double* row = cell_matrix + std::size_t(3 * a + i) * N;
       for (int b = a; b < NB; ++b) {
@@ -79,7 +93,7 @@ void add_split_tangent(const Tensor<1, 3>* grad, double jxw, const Tensor2& F, c
         const double* hb = h[b];
         double* x = row + 3 * b;
         for (int k = 0; k < 3; ++k) x[k] += with_f[i] * fb[k] + with_h[i] * hb[k] + crossed[k] * hb[i];
-        x[i] += alpha * (grad[a][0] * grad[b][0] + grad[a][1] * grad[b][1] + grad[a][2] * grad[b][2]);
+        x[i] += diagonal[b];
       }
     }
   }
@@ -119,7 +133,7 @@ bool ElasticityTerm::assemble_fixed(const std::vector<unsigned int>& cells, cons
     const double* cell_jxw = c.jxw_of(k);
     const Tensor<1, 3>* cell_gradients = c.gradients_of(k);
     const Material& material = material_of(k);
-    const bool split = tangent && material.has_split_tangent();
+    const bool split = tangent && material.has_split_tangent() && !full_tangent_requested();
     for (int i = 0; i < N; ++i) u_local[i] = u[indices[i]];
     for (unsigned int q = 0; q < nq; ++q) {
       const Tensor<1, 3>* grad = cell_gradients + q * c.nbase;

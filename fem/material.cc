@@ -2,6 +2,7 @@
 
 #include <deal.II/base/tensor.h>
 
+#include <cassert>
 #include <cmath>
 #include <limits>
 #include <stdexcept>
@@ -111,15 +112,13 @@ bool InvariantMaterial::evaluate(const Tensor2& F, Tensor2& P, Tensor4* A) const
 
 // With psi_2 = 0: P = 2 psi_1 F + psi_J J H, and A = 2 psi_1 d_ik d_JL + 4 h_11 F x F
 // + 2 J h_1J (F x H + H x F) + (J^2 h_JJ + J psi_J) H x H - J psi_J H_iL H_kJ (H = F^-T).
-bool InvariantMaterial::evaluate_split(const Tensor2& F, Tensor2& P, SplitTangent& t) const {
-  if (!has_split_tangent()) return Material::evaluate_split(F, P, t);  // throws
+bool InvariantMaterial::split_without_i2(const Tensor2& F, Tensor2& P, SplitTangent& t) const {
   const double j = dealii::determinant(F);
   if (!(j > 0)) return false;
   const Tensor2 c = dealii::transpose(F) * F;
   const double i1 = dealii::trace(c), i2 = 0.5 * (i1 * i1 - dealii::scalar_product(c, c));
   const InvariantDerivatives d = derivatives(i1, i2, j);
-  if (d.d[1] != 0 || d.h[0][1] != 0 || d.h[1][1] != 0 || d.h[1][2] != 0)
-    throw std::logic_error(name() + " depends on I2: no split tangent");
+  assert(d.d[1] == 0 && d.h[0][1] == 0 && d.h[1][1] == 0 && d.h[1][2] == 0);  // the model has no I2
   t.H = dealii::transpose(dealii::invert(F));
   P = 2 * d.d[0] * F + d.d[2] * j * t.H;
   t.alpha = 2 * d.d[0];

@@ -90,10 +90,15 @@ class InvariantMaterial : public Material {
  public:
   double energy(const Tensor2& F) const override;
   bool evaluate(const Tensor2& F, Tensor2& stress, Tensor4* tangent) const override;
-  // For the models with psi_2 = 0 and no I2 in the Hessian (the subclasses that say so).
-  bool evaluate_split(const Tensor2& F, Tensor2& stress, SplitTangent& tangent) const override;
   // The model itself: psi and its partial derivatives at (I1, I2, J), J > 0.
   virtual InvariantDerivatives derivatives(double i1, double i2, double j) const = 0;
+
+ protected:
+  // evaluate_split() for the models whose psi has no I2 (psi_2 = 0 and no I2 in the Hessian): the
+  // subclasses that are such a model call it. Whether a model is one is a property of its formula, checked
+  // by the tests (Materials.SplitTangentRebuildsTheFullTangent) and by an assertion in debug builds, not
+  // at every quadrature point.
+  bool split_without_i2(const Tensor2& F, Tensor2& stress, SplitTangent& tangent) const;
 };
 
 class SaintVenantKirchhoff final : public InvariantMaterial {
@@ -114,6 +119,9 @@ class NeoHookean final : public InvariantMaterial {
   std::string name() const override { return "neo_hookean"; }
   InvariantDerivatives derivatives(double i1, double i2, double j) const override;
   bool has_split_tangent() const override { return true; }
+  bool evaluate_split(const Tensor2& F, Tensor2& stress, SplitTangent& tangent) const override {
+    return split_without_i2(F, stress, tangent);
+  }
   double shear_modulus() const override { return mu_; }
   double bulk_modulus() const override { return lambda_ + 2 * mu_ / 3; }
 
@@ -128,6 +136,9 @@ class NearlyIncompressibleNeoHookean final : public InvariantMaterial {
   std::string name() const override { return "neo_hookean_incompressible"; }
   InvariantDerivatives derivatives(double i1, double i2, double j) const override;
   bool has_split_tangent() const override { return true; }
+  bool evaluate_split(const Tensor2& F, Tensor2& stress, SplitTangent& tangent) const override {
+    return split_without_i2(F, stress, tangent);
+  }
   double shear_modulus() const override { return mu_; }
   double bulk_modulus() const override { return kappa_; }
   bool volumetric(double j, double& u1, double& u2) const override;

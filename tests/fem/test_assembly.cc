@@ -135,10 +135,9 @@ TEST(Assembly, SplitTangentIsTheResidualsDerivativeP2) {
   dealii::Triangulation<3> tria;
   dealii::GridGenerator::subdivided_hyper_cube_with_simplices(tria, 2, 0, kSide);
   const double e = 5000, nu = 0.49;
-  check(tria, 2, NearlyIncompressibleNeoHookean(e / (3 * (1 - 2 * nu)), lame_mu(e, nu)), false,
-        "P2 nearly incompressible neo-Hookean");
-  check(tria, 2, NearlyIncompressibleNeoHookean(e / (3 * (1 - 2 * nu)), lame_mu(e, nu)), true,
-        "P2 nearly incompressible neo-Hookean, mean dilatation");
+  const NearlyIncompressibleNeoHookean material(e / (3 * (1 - 2 * nu)), lame_mu(e, nu));
+  check(tria, 2, material, false, "P2 nearly incompressible neo-Hookean");
+  check(tria, 2, material, true, "P2 nearly incompressible neo-Hookean, mean dilatation");
 }
 
 TEST(Assembly, SplitTangentIsTheResidualsDerivativeQ1MeanDilatation) {
