@@ -124,6 +124,7 @@ bool ElasticityTerm::assemble_fixed(const std::vector<unsigned int>& cells, cons
   bool node_major = true;
   for (int i = 0; i < N; ++i) node_major = node_major && comp[i] == i % 3 && base[i] == i / 3;
   if (!node_major) throw std::logic_error("the elasticity kernel expects the dofs of a cell node by node");
+  const bool split_allowed = tangent && !full_tangent_requested();
   std::vector<Tensor2> F_at(nq);
   Tensor2 P;
   Tensor4 A;
@@ -133,7 +134,7 @@ bool ElasticityTerm::assemble_fixed(const std::vector<unsigned int>& cells, cons
     const double* cell_jxw = c.jxw_of(k);
     const Tensor<1, 3>* cell_gradients = c.gradients_of(k);
     const Material& material = material_of(k);
-    const bool split = tangent && material.has_split_tangent() && !full_tangent_requested();
+    const bool split = split_allowed && material.has_split_tangent();
     for (int i = 0; i < N; ++i) u_local[i] = u[indices[i]];
     for (unsigned int q = 0; q < nq; ++q) {
       const Tensor<1, 3>* grad = cell_gradients + q * c.nbase;
