@@ -4,9 +4,13 @@
 # Its base directory is the source tree, so that the compile lines' absolute paths (-I/path/to/clone/...)
 # are hashed relative to it and a clone in another folder (a fresh clone for CI or the README's test
 # command) finds what this one compiled; with ccache's default (no base directory) it found nothing.
+# CCACHE_NOHASHDIR: with -g (the asan and fuzz presets) ccache would also hash the build folder, so a
+# clone elsewhere found none of those objects; without it, the debug information of an object taken
+# from the cache names the build folder it was first compiled in (sanitizer reports still name the
+# right sources, which are relative to the base directory).
 find_program(FETOUCH_CCACHE ccache)
 if(FETOUCH_CCACHE AND NOT CMAKE_CXX_COMPILER_LAUNCHER)
-  set(FETOUCH_CCACHE_LAUNCHER env CCACHE_BASEDIR=${CMAKE_SOURCE_DIR} ${FETOUCH_CCACHE})
+  set(FETOUCH_CCACHE_LAUNCHER env CCACHE_BASEDIR=${CMAKE_SOURCE_DIR} CCACHE_NOHASHDIR=1 ${FETOUCH_CCACHE})
   set(CMAKE_C_COMPILER_LAUNCHER ${FETOUCH_CCACHE_LAUNCHER})
   set(CMAKE_CXX_COMPILER_LAUNCHER ${FETOUCH_CCACHE_LAUNCHER})
   message(STATUS "Fetouch: compiling through ${FETOUCH_CCACHE} (base directory ${CMAKE_SOURCE_DIR})")

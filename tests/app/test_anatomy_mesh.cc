@@ -27,6 +27,7 @@
 
 #include "imaging/phantom.h"
 #include "tests/support/run_command.h"
+#include "tests/support/test_paths.h"
 #include "tests/support/tet_faces.h"
 
 namespace fetouch::testing {

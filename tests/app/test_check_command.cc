@@ -7,6 +7,7 @@
 
 #include "tests/support/broken_scene.h"
 #include "tests/support/run_command.h"
+#include "tests/support/test_paths.h"
 
 namespace fetouch::testing {
 namespace {

@@ -34,6 +34,7 @@
 #include "fem/tissue_mesh_builder.h"
 #include "tests/support/nifti_file.h"
 #include "tests/support/run_command.h"
+#include "tests/support/test_paths.h"
 
 namespace fetouch::testing {
 namespace {

@@ -14,6 +14,7 @@
 
 #include "app/recording.h"
 #include "tests/support/run_command.h"
+#include "tests/support/test_paths.h"
 
 namespace fetouch::testing {
 namespace {

@@ -13,6 +13,7 @@
 
 #include "imaging/volume_io.h"
 #include "tests/support/run_command.h"
+#include "tests/support/test_paths.h"
 
 namespace fetouch::testing {
 namespace {

@@ -17,6 +17,7 @@
 
 #include "app/recording.h"
 #include "tests/support/run_command.h"
+#include "tests/support/test_paths.h"
 #include "tests/support/vtk_fields.h"
 
 namespace fetouch::testing {

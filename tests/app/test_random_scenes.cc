@@ -16,6 +16,7 @@
 #include "app/study/random_scenes.h"
 #include "config/scene_loader.h"
 #include "tests/support/scratch_dir.h"
+#include "tests/support/test_paths.h"
 
 namespace fetouch::app {
 namespace {

@@ -22,6 +22,7 @@
 #include "app/recording.h"
 #include "haptics/devices.h"
 #include "tests/support/run_command.h"
+#include "tests/support/test_paths.h"
 #include "tests/support/vtk_fields.h"
 
 namespace fetouch::testing {

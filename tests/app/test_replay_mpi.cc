@@ -16,6 +16,7 @@
 #include "app/recording.h"
 #include "tests/support/run_command.h"
 #include "tests/support/scene_variant.h"
+#include "tests/support/test_paths.h"
 #include "tests/support/vtk_fields.h"
 
 namespace fetouch::testing {

@@ -23,6 +23,7 @@
 #include "app/recording.h"
 #include "tests/support/run_command.h"
 #include "tests/support/scene_variant.h"
+#include "tests/support/test_paths.h"
 
 namespace fetouch::testing {
 namespace {

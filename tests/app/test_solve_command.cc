@@ -16,6 +16,7 @@
 #include <sstream>
 
 #include "tests/support/run_command.h"
+#include "tests/support/test_paths.h"
 
 namespace fetouch::testing {
 namespace {
@@ -32,7 +33,7 @@ fs::path scratch(const std::string& name) {
 // the 0.08 x 0.05 m face x = 0.1 (0.08 N along x): the base must push back exactly that.
 TEST(SolveCommand, SupportReactionBalancesGravityAndTraction) {
   const fs::path dir = scratch("gravity");
-  const auto r = run_command(fetouch("solve --json --out " + dir.string() + " " + FETOUCH_TEST_DATA_DIR "/data/block_gravity.yaml"));
+  const auto r = run_command(fetouch("solve --json --out " + dir.string() + " " + FETOUCH_TEST_DATA_DIR + "/data/block_gravity.yaml"));
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const YAML::Node j = YAML::Load(r.out);
   ASSERT_TRUE(j["converged"].as<bool>());
@@ -53,7 +54,7 @@ TEST(SolveCommand, SupportReactionBalancesGravityAndTraction) {
 TEST(SolveCommand, WaterBalloonKeepsItsVolumeAndPushesBack) {
   const fs::path dir = scratch("balloon");
   const auto r = run_command(fetouch("solve --json --radius 0.015 --press 0 0 0.05 0 0 -0.5 --point 0 0 -0.05 --out " +
-                                     dir.string() + " " + FETOUCH_TEST_DATA_DIR "/data/water_balloon.yaml"));
+                                     dir.string() + " " + FETOUCH_TEST_DATA_DIR + "/data/water_balloon.yaml"));
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const YAML::Node j = YAML::Load(r.out);
   ASSERT_TRUE(j["converged"].as<bool>());
@@ -72,7 +73,7 @@ TEST(SolveCommand, WaterBalloonKeepsItsVolumeAndPushesBack) {
 // swings back above it (an undamped step response rings about the static state).
 TEST(SolveCommand, InertiaMakesADynamicLoadCaseWithATimeSeries) {
   const fs::path dir = scratch("drop");
-  const std::string scene = FETOUCH_TEST_DATA_DIR "/data/block_drop.yaml";
+  const std::string scene = std::string(FETOUCH_TEST_DATA_DIR) + "/data/block_drop.yaml";
   const auto r = run_command(fetouch("solve --json --duration 0.1 --out " + dir.string() + " " + scene));
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const YAML::Node j = YAML::Load(r.out);

@@ -19,6 +19,7 @@
 #include <vector>
 
 #include "tests/support/run_command.h"
+#include "tests/support/test_paths.h"
 
 namespace fetouch::testing {
 namespace {
@@ -66,7 +67,7 @@ void expect_balanced(const YAML::Node& parallel, const std::vector<long>& pieces
 
 void expect_same_solve(const std::string& serial_arguments, const std::string& arguments) {
   const YAML::Node serial = solve("", serial_arguments);
-  const YAML::Node parallel = solve(FETOUCH_MPIEXEC " --allow-run-as-root --oversubscribe -np 2 ", arguments);
+  const YAML::Node parallel = solve(std::string(FETOUCH_MPIEXEC) + " --allow-run-as-root --oversubscribe -np 2 ", arguments);
   const std::filesystem::path pvtu = parallel["vtu"].as<std::string>();
   const std::string stem = pvtu.filename().string().substr(0, pvtu.filename().string().size() - std::string("_0000.pvtu").size());
   auto serial_grid = vtkSmartPointer<vtkXMLUnstructuredGridReader>::New();
@@ -105,9 +106,9 @@ void expect_same_solve(const std::string& serial_arguments, const std::string& a
 
 TEST(SolveMpi, TwoRanksReproduceTheSerialBlockPress) {
   const std::filesystem::path dir = std::filesystem::temp_directory_path() / ("fetouch_mpi_solve_" + std::to_string(::getpid()));
-  const std::string press = FETOUCH_SOURCE_DIR "/config/scenes/block_press.yaml --press 0.05 0.04 0.05 0 0 -0.3 --point 0.05 0.04 0.03";
+  const std::string press = std::string(FETOUCH_SOURCE_DIR) + "/config/scenes/block_press.yaml --press 0.05 0.04 0.05 0 0 -0.3 --point 0.05 0.04 0.03";
   expect_same_solve(press + " --out " + (dir / "serial").string(), press + " --out " + (dir / "parallel").string());
-  const std::string gravity = FETOUCH_TEST_DATA_DIR "/data/block_gravity.yaml --point 0.05 0.04 0.02";
+  const std::string gravity = std::string(FETOUCH_TEST_DATA_DIR) + "/data/block_gravity.yaml --point 0.05 0.04 0.02";
   expect_same_solve(gravity + " --out " + (dir / "serial_g").string(), gravity + " --out " + (dir / "parallel_g").string());
   std::filesystem::remove_all(dir);
 }

@@ -15,6 +15,7 @@
 
 #include "tests/support/run_command.h"
 #include "tests/support/scene_variant.h"
+#include "tests/support/test_paths.h"
 
 namespace fetouch::testing {
 namespace {

@@ -20,6 +20,7 @@
 #include "app/realtime_cores.h"
 #include "tests/support/run_command.h"
 #include "tests/support/scratch_dir.h"
+#include "tests/support/test_paths.h"
 #include "tests/support/thread_nice.h"
 
 namespace fetouch::testing {

@@ -32,6 +32,7 @@
 #include <vector>
 
 #include "tests/support/run_command.h"
+#include "tests/support/test_paths.h"
 
 namespace fetouch::testing {
 namespace {

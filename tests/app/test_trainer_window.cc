@@ -39,6 +39,7 @@
 #include "meshes/interface_quality.h"
 #include "imaging/phantom.h"
 #include "tests/support/run_command.h"
+#include "tests/support/test_paths.h"
 #include "tests/support/trainer_window_fixture.h"
 
 namespace fetouch::testing {

@@ -12,6 +12,7 @@
 #include "tests/support/run_command.h"
 #include "tests/support/scene_variant.h"
 #include "tests/support/scratch_dir.h"
+#include "tests/support/test_paths.h"
 
 namespace fetouch::testing {
 namespace {

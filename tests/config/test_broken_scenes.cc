@@ -6,6 +6,7 @@
 
 #include "config/scene_loader.h"
 #include "tests/support/broken_scene.h"
+#include "tests/support/test_paths.h"
 
 namespace fetouch::testing {
 namespace {

@@ -7,6 +7,7 @@
 #include <fstream>
 
 #include "config/scene_loader.h"
+#include "tests/support/test_paths.h"
 
 namespace fetouch::config {
 namespace {

@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "haptics/phantom.h"
+#include "tests/support/test_paths.h"
 
 namespace fetouch::haptics {
 namespace {

@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "fem/tissue_mesh_builder.h"
+#include "tests/support/test_paths.h"
 
 namespace fetouch::fem {
 namespace {

@@ -7,6 +7,7 @@
 #include <stdexcept>
 
 #include "tests/hostile/hostile_case.h"
+#include "tests/support/test_paths.h"
 
 namespace fetouch::testing::hostile {
 

@@ -16,6 +16,7 @@
 
 #include "tests/hostile/hostile_case.h"
 #include "tests/hostile/run_process.h"
+#include "tests/support/test_paths.h"
 
 namespace fetouch::testing::hostile {
 namespace {

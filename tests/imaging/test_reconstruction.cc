@@ -12,6 +12,7 @@
 
 #include "imaging/reconstruction.h"
 #include "imaging/volume_io.h"
+#include "tests/support/test_paths.h"
 
 namespace fetouch::imaging {
 namespace {

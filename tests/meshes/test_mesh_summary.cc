@@ -4,6 +4,7 @@
 #include <fstream>
 
 #include "meshes/mesh_summary.h"
+#include "tests/support/test_paths.h"
 
 namespace fetouch::meshes {
 namespace {

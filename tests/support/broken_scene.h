@@ -9,6 +9,8 @@
 #include <string>
 #include <vector>
 
+#include "tests/support/test_paths.h"
+
 namespace fetouch::testing {
 
 struct BrokenSceneExpectation {

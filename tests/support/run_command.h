@@ -9,6 +9,8 @@
 #include <sstream>
 #include <string>
 
+#include "tests/support/test_paths.h"
+
 namespace fetouch::testing {
 
 struct CommandResult {

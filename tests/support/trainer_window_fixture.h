@@ -17,6 +17,7 @@
 #include "app/scene_mesh.h"
 #include "app/trainer/trainer_window.h"
 #include "tests/support/scratch_dir.h"
+#include "tests/support/test_paths.h"
 
 namespace fetouch::testing {
 
