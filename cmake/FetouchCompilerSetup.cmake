@@ -5,9 +5,10 @@
 # are hashed relative to it and a clone in another folder (a fresh clone for CI or the README's test
 # command) finds what this one compiled; with ccache's default (no base directory) it found nothing.
 # CCACHE_NOHASHDIR: with -g (the asan and fuzz presets) ccache would also hash the build folder, so a
-# clone elsewhere found none of those objects; without it, the debug information of an object taken
-# from the cache names the build folder it was first compiled in (sanitizer reports still name the
-# right sources, which are relative to the base directory).
+# clone elsewhere found none of those objects. The price: an object taken from the cache keeps the
+# build folder it was first compiled in as its debug information's compilation folder, so a
+# sanitizer report or gdb names the right file (its path relative to the base directory) under that
+# first clone's folder.
 find_program(FETOUCH_CCACHE ccache)
 if(FETOUCH_CCACHE AND NOT CMAKE_CXX_COMPILER_LAUNCHER)
   set(FETOUCH_CCACHE_LAUNCHER env CCACHE_BASEDIR=${CMAKE_SOURCE_DIR} CCACHE_NOHASHDIR=1 ${FETOUCH_CCACHE})
