@@ -125,11 +125,14 @@ StepReport NewtonDriver::newton(double lambda, const NewtonSettings& s, double r
   if (frame && tangent_assembled_)
     for (std::size_t i = 0; i < terms_.size(); ++i) restore(i, negligible_force);
   for (int it = 0; it <= s.max_iterations; ++it) {
-    // A frame's first correction solves with the previous frame's tangent, still in the matrix
-    // (a frame moves the state little): the first assembly is the residual's alone. The trial step
-    // is assembled with its tangent, as is every later iteration.
-    const bool keep_tangent = frame && it == 0 && tangent_assembled_;
-    if (!assembled && !assemble(lambda, r, /*tangent=*/!keep_tangent)) {
+    // Every iteration's residual is assembled with its tangent, a frame's first too: the state the
+    // frame hands over is then the tangent's, so the compliance W is this state's even when the
+    // linear prediction already meets the policy (until 2026-12-02 such a frame kept the previous
+    // frame's tangent, and its W was the previous state's), and the first correction steps with the
+    // tangent at the predicted state. (The previous frame's tangent cost the Leopold take 373 Newton
+    // iterations against 208, its steps cut by the line search to 0.2-0.6: two hands squeezing the
+    // sac change the tangent within a frame.)
+    if (!assembled && !assemble(lambda, r, /*tangent=*/true)) {
       report.failure = "an element inverted (J <= 0)";
       return report;
     }

@@ -36,6 +36,13 @@ Tensor<1, 3> press(double newton) {
   return f;
 }
 
+// The block's bottom fixed, and two probes of 12 mm radius 3 cm apart on its top.
+void on_the_table_with_two_probes(QuasiStaticSolver& solver) {
+  solver.prescribe_displacement(4, {true, true, true}, Tensor<1, 3>());
+  solver.add_contact_patch(Point<3>(0.035, 0.04, 0.05), 0.012);
+  solver.add_contact_patch(Point<3>(0.065, 0.04, 0.05), 0.012);
+}
+
 NewtonSettings tight() {
   NewtonSettings s;
   s.relative_tolerance = 1e-14;
@@ -131,16 +138,11 @@ TEST(Compliance, FrameUpdateMatchesAFreshSolve) {
   dealii::Triangulation<3> tria;
   make_block(tria);
   const NeoHookean material(lame_lambda(5000, 0.45), lame_mu(5000, 0.45));
-  const auto make = [&](QuasiStaticSolver& solver) {
-    solver.prescribe_displacement(4, {true, true, true}, Tensor<1, 3>());
-    solver.add_contact_patch(Point<3>(0.035, 0.04, 0.05), 0.012);
-    solver.add_contact_patch(Point<3>(0.065, 0.04, 0.05), 0.012);
-  };
   NewtonSettings settings;
   settings.relative_tolerance = 1e-10;
   QuasiStaticSolver framed(tria, material, 1), fresh(tria, material, 1);
-  make(framed);
-  make(fresh);
+  on_the_table_with_two_probes(framed);
+  on_the_table_with_two_probes(fresh);
   framed.set_patch_force(0, press(0.3));
   framed.set_patch_force(1, press(0.3));
   ASSERT_TRUE(framed.solve(settings).converged);
@@ -175,6 +177,55 @@ TEST(Compliance, FrameUpdateMatchesAFreshSolve) {
               frame.total_iterations, frame.linear_iterations, framed.last_compliance_times().galerkin_residual,
               worst / largest);
   EXPECT_LT(worst, 1e-5 * largest);
+}
+
+// A frame whose linear prediction already meets the accuracy policy takes no Newton iteration;
+// the W it hands over must still be the tangent's at the state it hands over, not the last frame's.
+// The forces grow by 10 %: W changes visibly (the tissue stiffens), and the policy (0.1 mm, 10 mN)
+// accepts the prediction. W is compared with a second solver that reaches the same loads from
+// scratch to a tight tolerance: the frame's W must be nearer that than to the W before the frame
+// by a factor of ten (up to 2026-12-02 it was the W before the frame: the prediction moved the state
+// and nothing assembled the tangent there).
+TEST(Compliance, AFrameThatTakesNoNewtonIterationHandsOverItsOwnStatesCompliance) {
+  dealii::Triangulation<3> tria;
+  make_block(tria);
+  const NeoHookean material(lame_lambda(5000, 0.45), lame_mu(5000, 0.45));
+  NewtonSettings settings;
+  settings.relative_tolerance = 1e-10;
+  settings.position_tolerance_m = 1e-4;
+  settings.force_tolerance_n = 1e-2;
+  QuasiStaticSolver framed(tria, material, 1), fresh(tria, material, 1);
+  on_the_table_with_two_probes(framed);
+  on_the_table_with_two_probes(fresh);
+  framed.set_patch_force(0, press(0.3));
+  framed.set_patch_force(1, press(0.3));
+  ASSERT_TRUE(framed.solve(settings).converged);
+  const dealii::FullMatrix<double> w_before = framed.compliance();
+  framed.set_patch_force(0, press(0.33));
+  framed.set_patch_force(1, press(0.33));
+  const SolveReport frame = framed.solve(settings);
+  ASSERT_TRUE(frame.converged);
+  ASSERT_EQ(frame.total_iterations, 0) << "the prediction meets the policy: the case under test";
+  const dealii::FullMatrix<double> w_framed = framed.compliance();
+
+  NewtonSettings from_scratch;
+  from_scratch.relative_tolerance = 1e-12;
+  from_scratch.load_steps = 2;
+  fresh.set_patch_force(0, press(0.33));
+  fresh.set_patch_force(1, press(0.33));
+  ASSERT_TRUE(fresh.solve(from_scratch).converged);
+  const dealii::FullMatrix<double> w_fresh = fresh.compliance();
+
+  double framed_error = 0, before_error = 0;
+  for (unsigned int i = 0; i < 6; ++i)
+    for (unsigned int j = 0; j < 6; ++j) {
+      framed_error = std::max(framed_error, std::abs(w_framed(i, j) - w_fresh(i, j)));
+      before_error = std::max(before_error, std::abs(w_before(i, j) - w_fresh(i, j)));
+    }
+  std::printf("10 %% more force, no Newton iteration: |W - W_fresh| = %.3e m/N (the W before the frame: %.3e; W_zz %.4e)\n",
+              framed_error, before_error, w_fresh(2, 2));
+  EXPECT_GT(before_error, 1e-3 * std::abs(w_fresh(2, 2))) << "W must change visibly for the test to mean anything";
+  EXPECT_LT(framed_error, 0.1 * before_error);
 }
 
 }  // namespace
