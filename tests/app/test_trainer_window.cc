@@ -196,8 +196,8 @@ TEST_F(TrainerWindowTest, PauseStopsTimeResetReturnsToRestRecordReplays) {
   // Into the poke's hold (8 mm deep from 1.1 s to 2.1 s of the session's time): waited for on the
   // session's clock, not the wall's, since a loaded machine starts the session late; the shown
   // tissue may trail the probe by a frame or two.
+  wait_for_session_ticks(w, 1700);
   const auto ticks = [&w] { return w.session()->monitor().ticks.load(); };
-  for (int waited = 0; waited < 15000 && ticks() < 1700; waited += 20) QTest::qWait(20);
   for (int waited = 0; waited < 5000 && ticks() < 2100 && largest_displacement(w) <= 2e-3; waited += 20) QTest::qWait(20);
   EXPECT_GT(largest_displacement(w), 2e-3) << "mid-press, the tissue should be pushed in (tick " << ticks() << ")";
   QTest::keyClick(&w, Qt::Key_Space);
@@ -207,8 +207,7 @@ TEST_F(TrainerWindowTest, PauseStopsTimeResetReturnsToRestRecordReplays) {
   EXPECT_EQ(w.session()->monitor().ticks.load(), paused_at) << "paused: no tick runs";
   EXPECT_TRUE(w.session()->paused());
   QTest::keyClick(&w, Qt::Key_Space);
-  QTest::qWait(300);
-  EXPECT_GT(w.session()->monitor().ticks.load(), paused_at + 100) << "resumed";
+  EXPECT_GT(wait_for_session_ticks(w, paused_at + 101, 5000), paused_at + 100) << "resumed";
   // Reset: a new take from rest.
   QTest::keyClick(&w, Qt::Key_R);
   EXPECT_EQ(largest_displacement(w), 0.0) << "after a reset the tissue is at rest";
@@ -479,15 +478,13 @@ TEST_F(TrainerWindowTest, OpenRefusesABrokenSceneAndKeepsTheSessionThenOpensAnot
   EXPECT_NE(w.message().find("cannot open " + broken.string()), std::string::npos) << w.message();
   EXPECT_NE(w.message().find("broken.yaml:"), std::string::npos) << "file:line in " << w.message();
   EXPECT_EQ(w.session(), before);
-  QTest::qWait(300);
-  EXPECT_GT(w.session()->monitor().ticks.load(), ticks + 100) << "the session goes on";
+  EXPECT_GT(wait_for_session_ticks(w, ticks + 101, 5000), ticks + 100) << "the session goes on";
 
   ASSERT_TRUE(w.open_scene(fs::path(FETOUCH_SOURCE_DIR) / "config" / "scenes" / "block_press.yaml"));
   EXPECT_EQ(w.windowTitle().toStdString(), "Fetouch trainer: block_press");
   EXPECT_NE(w.session()->mesh().points.size(), points);
   EXPECT_EQ(largest_displacement(w), 0.0) << "a new take from rest";
-  QTest::qWait(1000);
-  EXPECT_GT(w.session()->monitor().ticks.load(), 500);
+  EXPECT_GT(wait_for_session_ticks(w, 501), 500);
 }
 
 }  // namespace

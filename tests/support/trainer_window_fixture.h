@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 #include <QApplication>
 #include <QSurfaceFormat>
+#include <QTest>
 #include <QVTKOpenGLNativeWidget.h>
 
 #include <cstdlib>
@@ -38,6 +39,16 @@ inline config::Scene scene(const std::string& file) {
   std::optional<config::Scene> s = app::load_scene_or_report((std::filesystem::path(FETOUCH_SOURCE_DIR) / "config" / "scenes" / file).string());
   EXPECT_TRUE(s);
   return *s;
+}
+
+// Waits, with Qt's events processed, until the window's session has run `ticks` haptic ticks or
+// `limit_ms` of wall time have passed, and returns the ticks reached. Tests that need session time
+// wait on the session's clock, not the wall's: a loaded machine starts the session late and runs it
+// slower than real time (a wall-clock second once recorded 0.467 s of take).
+inline long wait_for_session_ticks(app::trainer::TrainerWindow& w, long ticks, int limit_ms = 15000) {
+  const auto reached = [&w] { return w.session()->monitor().ticks.load(); };
+  for (int waited = 0; waited < limit_ms && reached() < ticks; waited += 20) QTest::qWait(20);
+  return reached();
 }
 
 class TrainerWindowTest : public ::testing::Test {
