@@ -58,9 +58,10 @@ class ElasticityTerm final : public Term {
   mutable std::vector<const Material*> cell_material_;  // per cell, built on first use
   bool mean_dilatation_ = false;
   unsigned int threads_ = 2;
-  // The first thread's cells, the second's, and those along the cut (after both); the first holds
-  // every cell below 2 kCellsPerThread cells and in parallel runs. Built on first use.
-  mutable std::array<std::vector<unsigned int>, 3> plan_;
+  // The first thread's cells and the second's, then, after both, the cells along their cut split
+  // the same way (the first thread's, the second's), then the cells along that second cut; the first
+  // holds every cell below 2 kCellsPerThread cells and in parallel runs. Built on first use.
+  mutable std::array<std::vector<unsigned int>, 5> plan_;
   mutable bool planned_ = false;
   // The assembling thread may run on more than 2 cores: a second thread need not share the
   // background factoriser's. Read with the plan.

@@ -19,11 +19,12 @@ namespace {
 using dealii::Point;
 using dealii::Tensor;
 
-// A box [0, a] x [0, b] x [0, c] with boundary ids 0..5 = x-, x+, y-, y+, z-, z+.
-void make_box(dealii::Triangulation<3>& tria, bool simplex, unsigned int n, Point<3> size) {
+// A box [0, a] x [0, b] x [0, c] of n[0] x n[1] x n[2] bricks, with boundary ids 0..5 = x-, x+, y-,
+// y+, z-, z+.
+void make_box(dealii::Triangulation<3>& tria, bool simplex, std::vector<unsigned int> n, Point<3> size) {
   const Point<3> origin(0, 0, 0);
   if (simplex) {
-    dealii::GridGenerator::subdivided_hyper_rectangle_with_simplices(tria, {n, n, n}, origin, size);
+    dealii::GridGenerator::subdivided_hyper_rectangle_with_simplices(tria, n, origin, size);
     for (const auto& cell : tria.active_cell_iterators())
       for (const unsigned int f : cell->face_indices()) {
         if (!cell->face(f)->at_boundary()) continue;
@@ -34,8 +35,11 @@ void make_box(dealii::Triangulation<3>& tria, bool simplex, unsigned int n, Poin
         }
       }
   } else {
-    dealii::GridGenerator::subdivided_hyper_rectangle(tria, {n, n, n}, origin, size, /*colorize=*/true);
+    dealii::GridGenerator::subdivided_hyper_rectangle(tria, n, origin, size, /*colorize=*/true);
   }
+}
+void make_box(dealii::Triangulation<3>& tria, bool simplex, unsigned int n, Point<3> size) {
+  make_box(tria, simplex, {n, n, n}, size);
 }
 
 struct Element {
@@ -207,17 +211,25 @@ TEST(QuasiStatic, ManufacturedSolutionConvergesAtTheOptimalOrder) {
 namespace fetouch::fem {
 namespace {
 
-// The elasticity assembly on one thread takes the two threads' halves in turn (elasticity_term.h),
-// so a solve gives the same answer to the bit on one thread or two: a neo-Hookean block of 2,560
-// tetrahedra (over the 2,000 at which a second thread starts) squeezed by 20 % and sheared.
-TEST(QuasiStatic, OneAssemblyThreadOrTwoGiveTheSameAnswerToTheBit) {
+// The elasticity assembly on one thread takes the two threads' groups in turn (elasticity_term.h),
+// so a solve gives the same answer to the bit on one thread or two: a neo-Hookean block squeezed by
+// 20 % and sheared. A cube of 2,560 tetrahedra (over the 2,000 at which a second thread starts; the
+// 640 cells along the cut go to one thread after both halves), and a slab of 5,120 cut across its
+// length, whose 2,560 cells along the cut are cut again.
+struct AssemblyBlock {
+  std::vector<unsigned int> bricks;
+  Point<3> size;
+};
+class AssemblyThreads : public ::testing::TestWithParam<AssemblyBlock> {};
+TEST_P(AssemblyThreads, OneAssemblyThreadOrTwoGiveTheSameAnswerToTheBit) {
+  const AssemblyBlock block = GetParam();
   const NeoHookean neo(lame_lambda(5000, 0.45), lame_mu(5000, 0.45));
   struct Answer {
     Tensor<1, 3> force, inside, corner;
   };
   const auto solve_with = [&](unsigned int threads) {
     dealii::Triangulation<3> tria;
-    make_box(tria, true, 8, Point<3>(0.08, 0.08, 0.05));
+    make_box(tria, true, block.bricks, block.size);
     dealii::GridTools::distort_random(0.2, tria, /*keep_boundary=*/true, /*seed=*/3);
     QuasiStaticSolver solver(tria, neo, 1);
     solver.set_assembly_threads(threads);
@@ -241,6 +253,12 @@ TEST(QuasiStatic, OneAssemblyThreadOrTwoGiveTheSameAnswerToTheBit) {
   }
   EXPECT_GT(std::abs(one.force[2]), 1.0);  // N: the squeeze carries a load
 }
+INSTANTIATE_TEST_SUITE_P(QuasiStatic, AssemblyThreads,
+                         ::testing::Values(AssemblyBlock{{8, 8, 8}, Point<3>(0.08, 0.08, 0.05)},
+                                           AssemblyBlock{{4, 16, 16}, Point<3>(0.1, 0.08, 0.05)}),
+                         [](const ::testing::TestParamInfo<AssemblyBlock>& block) {
+                           return block.index == 0 ? "Cube" : "Slab";
+                         });
 
 }  // namespace
 }  // namespace fetouch::fem
