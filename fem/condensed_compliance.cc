@@ -126,6 +126,7 @@ FullMatrix<double> CondensedCompliance::compute(LinearSystem& system, const std:
   };
   std::size_t carrier_index = 0;
   times.recycled_directions = 0;
+  times.first_residual = 0;
   if (g && basis.count() > 0) {
     // A kept carrier that has turned away from g (its cosine with g under half what it was) is
     // replaced at once: the deflation divides by g'w.
@@ -193,6 +194,7 @@ FullMatrix<double> CondensedCompliance::compute(LinearSystem& system, const std:
       const double relative = std::sqrt(dot(residual, residual, n)) / h[k].l2_norm();
       worst = std::isnan(relative) ? relative : std::max(worst, relative);  // a singular B'K B: NaN, kept
     }
+    if (added.empty() && times.recycled_directions == 0) times.first_residual = worst;  // the old columns' alone
     if (worst <= galerkin_tolerance) break;
     if (!std::isfinite(worst) || round == kMaxGalerkinRounds) {
       solve_columns = true;

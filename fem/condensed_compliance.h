@@ -19,6 +19,7 @@ struct ComplianceTimes {
   double total_s = 0;  // the whole update: the phases, the products with K and the Galerkin algebra
   int linear_iterations = 0, factorisations = 0;
   double galerkin_residual = 0;  // of the last columns' Galerkin update (0: none)
+  double first_residual = 0;     // of the old columns' Galerkin update alone, before any direction joined
   bool refined = false;          // the columns were solved again
   int recycled_directions = 0;   // directions of the update before that joined the span
   bool carrier_kept = false;     // the liquid's carrier was the one kept from an earlier update

@@ -2,8 +2,9 @@
 
 #include <algorithm>
 #include <chrono>
-#include <cstdio>
 #include <cmath>
+#include <cstdio>
+#include <cstring>
 #include <stdexcept>
 
 #include <deal.II/dofs/dof_tools.h>
@@ -18,9 +19,13 @@ namespace fetouch::fem {
 using namespace dealii;
 
 std::string describe_frame(const SolveReport& r, const ComplianceTimes& c) {
-  char line[400], kept[80] = "";
+  char line[400], kept[120] = "";
   if (c.recycled_directions > 0 || c.carrier_kept)
     std::snprintf(kept, sizeof kept, ", kept %d directions%s", c.recycled_directions, c.carrier_kept ? " and the carrier" : "");
+  if (c.first_residual != c.galerkin_residual) {  // the old columns alone did not do: where they left it
+    const std::size_t used = std::strlen(kept);
+    std::snprintf(kept + used, sizeof kept - used, ", old columns alone %.1e", c.first_residual);
+  }
   std::snprintf(line, sizeof line,
                 "newton %d%s (%.1f ms: assembly %.1f, factor %.1f, solve %.1f ms, cg %d); compliance (%.1f ms: assembly "
                 "%.1f, factor %.1f, solve %.1f ms, cg %d, galerkin %.1e%s%s)",
