@@ -342,11 +342,7 @@ bool ElasticityTerm::assemble(const AssemblyState& state, AssemblyTarget& target
     return std::all_of(plan_.begin(), plan_.end(), run);
   const auto pair = [&](const std::vector<unsigned int>& a, const std::vector<unsigned int>& b) {
     if (b.empty()) return run(a);
-    bool second_ok = true;
-    std::thread worker([&] { second_ok = run(b); });
-    const bool first_ok = run(a);
-    worker.join();
-    return first_ok && second_ok;
+    return worker_.run([&] { return run(a); }, [&] { return run(b); });
   };
   return pair(plan_[0], plan_[1]) && pair(plan_[2], plan_[3]) && run(plan_[4]);
 }

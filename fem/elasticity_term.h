@@ -23,6 +23,7 @@
 
 #include "fem/discretisation.h"
 #include "fem/material.h"
+#include "fem/pair_worker.h"
 #include "fem/term.h"
 
 namespace fetouch::fem {
@@ -66,6 +67,7 @@ class ElasticityTerm final : public Term {
   // The assembling thread may run on more than 2 cores: a second thread need not share the
   // background factoriser's. Read with the plan.
   mutable bool spare_core_ = false;
+  PairWorker worker_;  // the second thread of each pair of groups
 };
 
 // Throws std::invalid_argument naming the material if it is not decoupled.
