@@ -184,14 +184,14 @@ void read_meshing(MapView& parent, MeshingOptions& out) {
     }
   }
   if (map.has("image_regions")) {  // {segmented: NAME, imaged: NAME}: the label map made from the image
-    const Entry e = map.entry("image_regions");
-    MapView names(map.reader(), e.value, e.path, e.key_mark, {"segmented", "imaged"});
+    const Entry pair = map.entry("image_regions");
+    MapView names(map.reader(), pair.value, pair.path, pair.key_mark, {"segmented", "imaged"});
     std::string segmented, imaged;
     if (names.valid() && names.text("segmented", segmented, Need::required) && names.text("imaged", imaged, Need::required)) {
       if (!out.regions.empty() || !out.labels.empty())
-        map.reader().error(e.key_mark, e.path, "image_regions makes the regions from an intensity image: drop regions and labels");
+        map.reader().error(pair.key_mark, pair.path, "image_regions makes the regions from an intensity image: drop regions and labels");
       else if (segmented == imaged)
-        map.reader().error(e.value_mark, e.path, "the segmented and the imaged regions need two names, not '" + imaged + "' twice");
+        map.reader().error(pair.value_mark, pair.path, "the segmented and the imaged regions need two names, not '" + imaged + "' twice");
       else
         out.regions = {{imaged, {1}}, {segmented, {2}}}, out.regions_from_image = true;
     }
