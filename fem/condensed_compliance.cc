@@ -160,6 +160,7 @@ FullMatrix<double> CondensedCompliance::compute(LinearSystem& system, const std:
   // the span, at the cost of products with K only, when the old columns alone do not do.
   bool recycled = recycled_.count() == 0;
   std::vector<std::size_t> added;  // where this compliance's rounds' directions are in the basis
+  bool first_pass = true;          // the old columns (and the carrier) alone in the basis
   for (int round = 0; !solve_columns;) {
     const unsigned int size = static_cast<unsigned int>(basis.count());
     const Int fresh = static_cast<Int>(size - known);
@@ -194,7 +195,7 @@ FullMatrix<double> CondensedCompliance::compute(LinearSystem& system, const std:
       const double relative = std::sqrt(dot(residual, residual, n)) / h[k].l2_norm();
       worst = std::isnan(relative) ? relative : std::max(worst, relative);  // a singular B'K B: NaN, kept
     }
-    if (added.empty() && times.recycled_directions == 0) times.first_residual = worst;  // the old columns' alone
+    if (first_pass) times.first_residual = worst, first_pass = false;  // the old columns' alone
     if (worst <= galerkin_tolerance) break;
     if (!std::isfinite(worst) || round == kMaxGalerkinRounds) {
       solve_columns = true;
