@@ -235,15 +235,19 @@ TEST(ReplayCommand, RealTimeRendersTheLockstepForces) {
 
 TEST(ReplayCommand, BadRequestsAreRefused) {
   const std::string scene = std::string(FETOUCH_SOURCE_DIR) + "/config/scenes/block_press.yaml";
-  const auto clock = run_command(fetouch("replay --clock wall --out /tmp/x " + scene));
+  // An output folder of this run's own: a file left at a shared name (/tmp/x until 2026-12-03)
+  // turned the trajectory's error below into one about --out.
+  const fs::path out = fs::temp_directory_path() / ("fetouch_bad_out_" + std::to_string(::getpid()));
+  const auto clock = run_command(fetouch("replay --clock wall --out " + out.string() + " " + scene));
   EXPECT_NE(clock.exit_code, 0);
   EXPECT_NE(clock.err.find("wall"), std::string::npos) << clock.err;
   const fs::path bad = fs::temp_directory_path() / ("fetouch_bad_traj_" + std::to_string(::getpid()) + ".csv");
   { std::ofstream(bad) << "t,x,y,z\n0,0,0,0\n1,0,0\n"; }
-  const auto broken = run_command(fetouch("replay --trajectory " + bad.string() + " --out /tmp/x " + scene));
+  const auto broken = run_command(fetouch("replay --trajectory " + bad.string() + " --out " + out.string() + " " + scene));
   EXPECT_EQ(broken.exit_code, 2);
   EXPECT_NE(broken.err.find(bad.string() + ":3:"), std::string::npos) << broken.err;
   fs::remove(bad);
+  fs::remove_all(out);
 }
 
 }  // namespace
