@@ -22,6 +22,8 @@ struct ComplianceTimes {
   double first_residual = 0;     // of the old columns' Galerkin update alone, before any direction joined
   bool refined = false;          // the columns were solved again
   int recycled_directions = 0;   // directions of the update before that joined the span
+  int rounds = 0;                // applications of the factorisation to the residuals of the columns that missed
+  int new_directions = 0;        // directions those rounds added (one for each column that missed)
   bool carrier_kept = false;     // the liquid's carrier was the one kept from an earlier update
 };
 
@@ -44,7 +46,7 @@ class CondensedCompliance {
                                      ComplianceTimes& times);
   // Z = K^-1 H' of the last W (empty before the first, or after clear()).
   const std::vector<dealii::Vector<double>>& columns() const { return z_; }
-  void clear() { z_.clear(), recycled_.reset(0), carrier_.reinit(0); }
+  void clear() { z_.clear(), recycled_.reset(0), recycled_column_.clear(), carrier_.reinit(0); }
   double galerkin_tolerance = kGalerkinTolerance;
 
  private:
@@ -68,6 +70,7 @@ class CondensedCompliance {
 
   std::vector<dealii::Vector<double>> z_;
   Columns recycled_;  // the last rounds' directions, newest first
+  std::vector<unsigned int> recycled_column_, kept_column_;  // the column of W each direction came from
   Columns basis_, kb_, h_, z_block_, kz_block_, kept_;  // the update's working storage
   dealii::Vector<double> scratch_;
   dealii::Vector<double> carrier_;  // (P + c g g')^-1 g of the liquid's g, at some earlier state

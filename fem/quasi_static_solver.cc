@@ -19,12 +19,16 @@ namespace fetouch::fem {
 using namespace dealii;
 
 std::string describe_frame(const SolveReport& r, const ComplianceTimes& c) {
-  char line[400], kept[120] = "";
+  char line[440], kept[160] = "";
   if (c.recycled_directions > 0 || c.carrier_kept)
     std::snprintf(kept, sizeof kept, ", kept %d directions%s", c.recycled_directions, c.carrier_kept ? " and the carrier" : "");
   if (c.first_residual != c.galerkin_residual) {  // the old columns alone did not do: where they left it
     const std::size_t used = std::strlen(kept);
     std::snprintf(kept + used, sizeof kept - used, ", old columns alone %.1e", c.first_residual);
+  }
+  if (c.rounds > 0) {
+    const std::size_t used = std::strlen(kept);
+    std::snprintf(kept + used, sizeof kept - used, ", %d rounds added %d directions", c.rounds, c.new_directions);
   }
   std::snprintf(line, sizeof line,
                 "newton %d%s (%.1f ms: assembly %.1f, factor %.1f, solve %.1f ms, cg %d); compliance (%.1f ms: assembly "
