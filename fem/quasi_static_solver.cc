@@ -28,7 +28,8 @@ std::string describe_frame(const SolveReport& r, const ComplianceTimes& c) {
   }
   if (c.rounds > 0) {
     const std::size_t used = std::strlen(kept);
-    std::snprintf(kept + used, sizeof kept - used, ", %d rounds added %d directions", c.rounds, c.new_directions);
+    std::snprintf(kept + used, sizeof kept - used, ", %d round%s added %d direction%s", c.rounds, c.rounds == 1 ? "" : "s",
+                  c.new_directions, c.new_directions == 1 ? "" : "s");
   }
   std::snprintf(line, sizeof line,
                 "newton %d%s (%.1f ms: assembly %.1f, factor %.1f, solve %.1f ms, cg %d); compliance (%.1f ms: assembly "
