@@ -98,8 +98,8 @@ FullMatrix<double> CondensedCompliance::compute(LinearSystem& system, const std:
   double worst = std::numeric_limits<double>::infinity();
   if (recycled_.length() != n) recycled_.reset(n), recycled_column_.clear();
   // The basis B and K B: the first round replaces the old columns by their Galerkin combination Z
-  // (K Z = H' - R comes for free); each round then adds P^-1 R, at the cost of 3m products with K
-  // and one blocked application of the factorisation.
+  // (K Z = H' - R comes for free); each round then adds P^-1 r of the columns that miss, at the
+  // cost of a product with K each and one blocked application of the factorisation.
   Columns& basis = basis_;
   Columns& kb = kb_;
   basis.reset(n), kb.reset(n), h_.reset(n);
@@ -159,8 +159,7 @@ FullMatrix<double> CondensedCompliance::compute(LinearSystem& system, const std:
   FullMatrix<double> gram, hb;
   unsigned int known = 0;
   std::vector<double> products, c_block, residuals, corrections;
-  std::vector<bool> misses(columns);  // the columns whose residual is above the tolerance
-  std::vector<unsigned int> missing;  // their indices, in a round
+  std::vector<unsigned int> missing;  // the columns whose residual is above the tolerance
   // The directions the last compliance's rounds added (where the factorisation missed K then) for
   // the columns that miss now join the span, at the cost of products with K only, when the old
   // columns alone do not do.
@@ -190,17 +189,18 @@ FullMatrix<double> CondensedCompliance::compute(LinearSystem& system, const std:
     z_block_.resize(columns), kz_block_.resize(columns);
     combine(basis[0], static_cast<Int>(size), c_block.data(), static_cast<Int>(columns), rows, z_block_[0]);
     combine(kb[0], static_cast<Int>(size), c_block.data(), static_cast<Int>(columns), rows, kz_block_[0]);
-    residuals.resize(n * columns);  // column-major, for the blocked solve
+    residuals.resize(n * columns);  // the missing columns', column-major, for the blocked solve
     worst = 0;
+    missing.clear();
     for (unsigned int k = 0; k < columns; ++k) {
       std::copy(z_block_[k], z_block_[k] + n, z[k].begin());
-      double* residual = residuals.data() + std::size_t(k) * n;
+      double* residual = residuals.data() + missing.size() * n;  // overwritten by the next if k passes
       const double* hk = h_[k];
       const double* kzk = kz_block_[k];
       for (std::size_t i = 0; i < n; ++i) residual[i] = hk[i] - kzk[i];
       const double relative = std::sqrt(dot(residual, residual, n)) / h[k].l2_norm();
       worst = std::isnan(relative) ? relative : std::max(worst, relative);  // a singular B'K B: NaN, kept
-      misses[k] = !(relative <= galerkin_tolerance);
+      if (!(relative <= galerkin_tolerance)) missing.push_back(k);
     }
     if (first_pass) times.first_residual = worst, first_pass = false;  // the old columns' alone
     if (worst <= galerkin_tolerance) break;
@@ -212,7 +212,7 @@ FullMatrix<double> CondensedCompliance::compute(LinearSystem& system, const std:
       recycled = true;
       const std::size_t first = basis.count();
       for (std::size_t k = 0; k < recycled_.count(); ++k) {
-        if (!misses[recycled_column_[k]]) continue;
+        if (std::find(missing.begin(), missing.end(), recycled_column_[k]) == missing.end()) continue;
         deflate(recycled_[k]);
         std::copy(recycled_[k], recycled_[k] + n, basis.add());
       }
@@ -226,13 +226,6 @@ FullMatrix<double> CondensedCompliance::compute(LinearSystem& system, const std:
     // Only the columns that miss get new directions: the others' residuals are within the
     // tolerance already (the Galerkin solution in the grown span is at least as good in the energy
     // norm), and each direction costs a product with K now and in every later round.
-    missing.clear();
-    for (unsigned int k = 0; k < columns; ++k)
-      if (misses[k]) {
-        if (missing.size() != k)
-          std::copy_n(residuals.begin() + std::size_t(k) * n, n, residuals.begin() + missing.size() * n);
-        missing.push_back(k);
-      }
     const int count = static_cast<int>(missing.size());
     corrections.resize(missing.size() * n);
     system.apply_factorisation(residuals.data(), corrections.data(), count);
