@@ -24,6 +24,8 @@ struct ComplianceTimes {
   int recycled_directions = 0;   // directions of the update before that joined the span
   int rounds = 0;                // applications of the factorisation to the residuals of the columns that missed
   int new_directions = 0;        // directions those rounds added (one for each column that missed)
+  int products = 0;              // vectors multiplied by K (the basis's, for the Galerkin projection)
+  double products_s = 0;         // their time; the rest of total_s beside the phases is dense algebra
   bool carrier_kept = false;     // the liquid's carrier was the one kept from an earlier update
 };
 

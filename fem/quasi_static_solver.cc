@@ -19,12 +19,17 @@ namespace fetouch::fem {
 using namespace dealii;
 
 std::string describe_frame(const SolveReport& r, const ComplianceTimes& c) {
-  char line[440], kept[160] = "";
+  char line[480], kept[200] = "";
   if (c.recycled_directions > 0 || c.carrier_kept)
     std::snprintf(kept, sizeof kept, ", kept %d directions%s", c.recycled_directions, c.carrier_kept ? " and the carrier" : "");
   if (c.first_residual != c.galerkin_residual) {  // the old columns alone did not do: where they left it
     const std::size_t used = std::strlen(kept);
     std::snprintf(kept + used, sizeof kept - used, ", old columns alone %.1e", c.first_residual);
+  }
+  if (c.products > 0) {
+    const std::size_t used = std::strlen(kept);
+    std::snprintf(kept + used, sizeof kept - used, ", %d product%s with K %.1f ms", c.products, c.products == 1 ? "" : "s",
+                  1e3 * c.products_s);
   }
   if (c.rounds > 0) {
     const std::size_t used = std::strlen(kept);
