@@ -47,33 +47,27 @@ std::array<double, 3> nearest_on_triangle(const Point<3>& p, const Point<3>& a, 
 Point<3> boundary_point_nearest(const Discretisation& d, const Point<3>& x, const Vector<double>* u) {
   double best = std::numeric_limits<double>::infinity();
   Point<3> answer = x;
-  std::vector<Point<3>> reference, deformed;
-  for (const auto& cell : d.dof.active_cell_iterators())
-    for (const unsigned int f : cell->face_indices()) {
-      if (!cell->face(f)->at_boundary()) continue;
-      const auto face = cell->face(f);
-      reference.clear(), deformed.clear();
-      for (const unsigned int k : face->vertex_indices()) {
-        reference.push_back(face->vertex(k));
-        Point<3> y = face->vertex(k);
-        if (u)
-          for (unsigned int c = 0; c < 3; ++c) y[c] += (*u)[face->vertex_dof_index(k, c)];
-        deformed.push_back(y);
-      }
-      // A quadrilateral's vertices are in lexicographic order (0 1 / 2 3): triangles 0 1 3, 0 3 2.
-      static const std::array<std::array<int, 3>, 2> quad{{{0, 1, 3}, {0, 3, 2}}}, triangle{{{0, 1, 2}, {0, 1, 2}}};
-      const auto& triangles = reference.size() == 4 ? quad : triangle;
-      for (const auto& t : triangles) {
-        const auto w = nearest_on_triangle(x, deformed[t[0]], deformed[t[1]], deformed[t[2]]);
-        Point<3> y, X;
-        for (int i = 0; i < 3; ++i) {
-          y += w[i] * Tensor<1, 3>(deformed[t[i]]);
-          X += w[i] * Tensor<1, 3>(reference[t[i]]);
-        }
-        const double dist = y.distance_square(x);
-        if (dist < best) best = dist, answer = X;
-      }
+  std::array<Point<3>, 4> deformed;
+  for (const Discretisation::BoundaryFace& face : d.boundary_faces()) {
+    for (unsigned int k = 0; k < face.vertices; ++k) {
+      deformed[k] = face.vertex[k];
+      if (u)
+        for (unsigned int c = 0; c < 3; ++c) deformed[k][c] += (*u)[face.vertex_dof[3 * k + c]];
     }
+    // A quadrilateral's vertices are in lexicographic order (0 1 / 2 3): triangles 0 1 3, 0 3 2.
+    static const std::array<std::array<int, 3>, 2> quad{{{0, 1, 3}, {0, 3, 2}}}, triangle{{{0, 1, 2}, {0, 1, 2}}};
+    const auto& triangles = face.vertices == 4 ? quad : triangle;
+    for (const auto& t : triangles) {
+      const auto w = nearest_on_triangle(x, deformed[t[0]], deformed[t[1]], deformed[t[2]]);
+      Point<3> y, X;
+      for (int i = 0; i < 3; ++i) {
+        y += w[i] * Tensor<1, 3>(deformed[t[i]]);
+        X += w[i] * Tensor<1, 3>(face.vertex[t[i]]);
+      }
+      const double dist = y.distance_square(x);
+      if (dist < best) best = dist, answer = X;
+    }
+  }
   return answer;
 }
 

@@ -79,22 +79,19 @@ FEFaceValues<3>& ContactPatchesTerm::face_values(unsigned int m, UpdateFlags fla
 template <class Visit>
 void ContactPatchesTerm::for_each_patch_point(const Patch& p, UpdateFlags flags, Visit visit) const {
   flags = flags | update_JxW_values | update_quadrature_points;
-  for (const auto& cell : d_.dof.active_cell_iterators())
-    for (const unsigned int f : cell->face_indices()) {
-      if (!cell->face(f)->at_boundary()) continue;
-      // Skip faces that are entirely out of reach (a cheap bound through the face's diameter).
-      const double diameter = cell->face(f)->diameter();
-      if (cell->face(f)->center().distance(p.center) > p.radius + diameter) continue;
-      FEFaceValues<3>& values = face_values(face_subdivisions(diameter, p.radius), flags);
-      values.reinit(cell, f);
-      bool first = true;
-      for (unsigned int q = 0; q < values.n_quadrature_points; ++q) {
-        const double r = values.quadrature_point(q).distance(p.center) / p.radius;
-        if (r >= 1) continue;
-        visit(cell, values, q, (1 - r * r) * (1 - r * r) * values.JxW(q), first);
-        first = false;
-      }
+  for (const Discretisation::BoundaryFace& face : d_.boundary_faces()) {
+    // Skip faces that are entirely out of reach (a cheap bound through the face's diameter).
+    if (face.center.distance(p.center) > p.radius + face.diameter) continue;
+    FEFaceValues<3>& values = face_values(face_subdivisions(face.diameter, p.radius), flags);
+    values.reinit(face.cell, face.face);
+    bool first = true;
+    for (unsigned int q = 0; q < values.n_quadrature_points; ++q) {
+      const double r = values.quadrature_point(q).distance(p.center) / p.radius;
+      if (r >= 1) continue;
+      visit(face.cell, values, q, (1 - r * r) * (1 - r * r) * values.JxW(q), first);
+      first = false;
     }
+  }
 }
 
 ContactPatchesTerm::ContactPatchesTerm(const Discretisation& discretisation) : d_(discretisation) {}

@@ -48,6 +48,19 @@ Discretisation::Discretisation(const Triangulation<3>& t, int degree, MPI_Comm c
   }
   dof.distribute_dofs(*fe);
   partition();
+  for (const auto& cell : dof.active_cell_iterators())
+    for (const unsigned int f : cell->face_indices()) {
+      const auto face = cell->face(f);
+      if (!face->at_boundary()) continue;
+      BoundaryFace b;
+      b.cell = cell, b.face = f, b.center = face->center(), b.diameter = face->diameter();
+      b.vertices = face->n_vertices();
+      for (unsigned int k = 0; k < b.vertices; ++k) {
+        b.vertex[k] = face->vertex(k);
+        for (unsigned int i = 0; i < 3; ++i) b.vertex_dof[3 * k + i] = face->vertex_dof_index(k, i);
+      }
+      boundary_faces_.push_back(b);
+    }
 }
 
 // METIS splits the cells (computed on rank 0, broadcast: every rank must agree), and dofs are
