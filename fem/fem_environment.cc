@@ -137,8 +137,17 @@ void FemEnvironment::solve(const std::vector<haptics::ContactSample>& samples, l
         std::snprintf(text, sizeof text, "%.3g", r);  // residuals span 1e-14 to 1e3 N
         residuals += (residuals.empty() ? "" : " ") + std::string(text);
       }
-    std::fprintf(stderr, "frame %ld: %.1f ms; %s; patch moves %ld; residuals %s\n", frame, 1e3 * out.status.seconds,
-                 describe_frame(report, solver_->last_compliance_times()).c_str(), patch_moves_, residuals.c_str());
+    // Each Newton step: its CG iterations and the line search's step length ("12 cg x 0.31").
+    std::string steps;
+    for (const StepReport& step : report.steps)
+      for (std::size_t k = 0; k < step.step_lengths.size(); ++k) {
+        char text[40];
+        std::snprintf(text, sizeof text, "%d cg x %.2g", k < step.step_cg.size() ? step.step_cg[k] : 0, step.step_lengths[k]);
+        steps += (steps.empty() ? "" : ", ") + std::string(text);
+      }
+    std::fprintf(stderr, "frame %ld: %.1f ms; %s; patch moves %ld; residuals %s%s%s\n", frame, 1e3 * out.status.seconds,
+                 describe_frame(report, solver_->last_compliance_times()).c_str(), patch_moves_, residuals.c_str(),
+                 steps.empty() ? "" : "; steps ", steps.c_str());
   }
 
 }

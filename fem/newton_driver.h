@@ -52,6 +52,10 @@ struct StepReport {
   double load_factor = 0;
   int iterations = 0;
   std::vector<double> residuals;  // per Newton iteration
+  // Per Newton step taken: the line search's step length (1: the full step) and the CG iterations of
+  // its linear solve.
+  std::vector<double> step_lengths;
+  std::vector<int> step_cg;
   bool converged = false;
   bool accurate = false;          // stopped by the accuracy policy
   bool carried = false;           // stopped by the frame's work bound, the remainder carried
