@@ -1,13 +1,13 @@
 #include "fem/condensed_compliance.h"
 
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <limits>
 
 #include <deal.II/lac/lapack_templates.h>
 
 #include "fem/small_spd.h"
+#include "fem/stopwatch.h"
 
 namespace fetouch::fem {
 
@@ -154,7 +154,7 @@ FullMatrix<double> CondensedCompliance::compute(LinearSystem& system, const std:
     const auto start = std::chrono::steady_clock::now();
     system.multiply(x, y, count);
     times.products += count;
-    times.products_s += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    times.products_s += seconds_since(start);
   };
   const auto multiply_from = [&](std::size_t first) {
     kb.resize(basis.count());

@@ -139,10 +139,10 @@ void FemEnvironment::solve(const std::vector<haptics::ContactSample>& samples, l
       }
     // Each Newton step: its CG iterations and the line search's step length ("12 cg x 0.31").
     std::string steps;
-    for (const StepReport& step : report.steps)
-      for (std::size_t k = 0; k < step.step_lengths.size(); ++k) {
+    for (const StepReport& load_step : report.steps)
+      for (const StepReport::Step& step : load_step.steps) {
         char text[40];
-        std::snprintf(text, sizeof text, "%d cg x %.2g", k < step.step_cg.size() ? step.step_cg[k] : 0, step.step_lengths[k]);
+        std::snprintf(text, sizeof text, "%d cg x %.2g", step.cg, step.length);
         steps += (steps.empty() ? "" : ", ") + std::string(text);
       }
     std::fprintf(stderr, "frame %ld: %.1f ms; %s; patch moves %ld; residuals %s%s%s\n", frame, 1e3 * out.status.seconds,

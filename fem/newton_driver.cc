@@ -192,7 +192,6 @@ StepReport NewtonDriver::newton(double lambda, const NewtonSettings& s, double r
     const int cg_before = system_.times.linear_iterations;
     try {
       system_.solve(effective, du, eta, /*zero_guess=*/true);
-      report.step_cg.push_back(system_.times.linear_iterations - cg_before);
     } catch (const std::runtime_error& e) {  // a singular tangent (past a limit point): the step fails
       report.failure = e.what();
       return report;
@@ -236,7 +235,7 @@ StepReport NewtonDriver::newton(double lambda, const NewtonSettings& s, double r
       }
       if (!accepted) alpha = energy ? std::max(0.1 * alpha, alpha * slope / (slope - trial_slope)) : alpha / 2;
     }
-    report.step_lengths.push_back(accepted ? alpha : 0.0);
+    report.steps.push_back({system_.times.linear_iterations - cg_before, accepted ? alpha : 0.0});
     if (!accepted) {
       u_ = start;
       set_unknowns(start_unknowns);

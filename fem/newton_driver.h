@@ -52,10 +52,13 @@ struct StepReport {
   double load_factor = 0;
   int iterations = 0;
   std::vector<double> residuals;  // per Newton iteration
-  // Per Newton step taken: the line search's step length (1: the full step) and the CG iterations of
-  // its linear solve.
-  std::vector<double> step_lengths;
-  std::vector<int> step_cg;
+  // Per Newton step solved: the CG iterations of its linear solve and the line search's step length
+  // (1: the full step; 0: the search found none, and the step failed).
+  struct Step {
+    int cg = 0;
+    double length = 0;
+  };
+  std::vector<Step> steps;
   bool converged = false;
   bool accurate = false;          // stopped by the accuracy policy
   bool carried = false;           // stopped by the frame's work bound, the remainder carried

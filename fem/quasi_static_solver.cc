@@ -20,22 +20,18 @@ using namespace dealii;
 
 std::string describe_frame(const SolveReport& r, const ComplianceTimes& c) {
   char line[480], kept[200] = "";
+  const auto append = [&kept](const char* format, auto... values) {
+    const std::size_t used = std::strlen(kept);
+    std::snprintf(kept + used, sizeof kept - used, format, values...);
+  };
+  const auto plural = [](int count) { return count == 1 ? "" : "s"; };
   if (c.recycled_directions > 0 || c.carrier_kept)
-    std::snprintf(kept, sizeof kept, ", kept %d directions%s", c.recycled_directions, c.carrier_kept ? " and the carrier" : "");
-  if (c.first_residual != c.galerkin_residual) {  // the old columns alone did not do: where they left it
-    const std::size_t used = std::strlen(kept);
-    std::snprintf(kept + used, sizeof kept - used, ", old columns alone %.1e", c.first_residual);
-  }
-  if (c.products > 0) {
-    const std::size_t used = std::strlen(kept);
-    std::snprintf(kept + used, sizeof kept - used, ", %d product%s with K %.1f ms", c.products, c.products == 1 ? "" : "s",
-                  1e3 * c.products_s);
-  }
-  if (c.rounds > 0) {
-    const std::size_t used = std::strlen(kept);
-    std::snprintf(kept + used, sizeof kept - used, ", %d round%s added %d direction%s", c.rounds, c.rounds == 1 ? "" : "s",
-                  c.new_directions, c.new_directions == 1 ? "" : "s");
-  }
+    append(", kept %d directions%s", c.recycled_directions, c.carrier_kept ? " and the carrier" : "");
+  if (c.first_residual != c.galerkin_residual)  // the old columns alone did not do: where they left it
+    append(", old columns alone %.1e", c.first_residual);
+  if (c.products > 0) append(", %d product%s with K %.1f ms", c.products, plural(c.products), 1e3 * c.products_s);
+  if (c.rounds > 0)
+    append(", %d round%s added %d direction%s", c.rounds, plural(c.rounds), c.new_directions, plural(c.new_directions));
   std::snprintf(line, sizeof line,
                 "newton %d%s (%.1f ms: assembly %.1f, factor %.1f, solve %.1f ms, cg %d); compliance (%.1f ms: assembly "
                 "%.1f, factor %.1f, solve %.1f ms, cg %d, galerkin %.1e%s%s)",
